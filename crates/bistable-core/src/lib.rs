@@ -1,0 +1,34 @@
+//! Core of bistable-impact: a mass on a bistable spring driven only by impacts with a
+//! sinusoidally vibrating plate (Nonlinear Dynamics 2022, doi 10.1007/s11071-022-07793-w).
+//!
+//! Everything here is nondimensional (`model.md` Sec. 2): time `τ = ω0 t`, lengths in units of
+//! the well distance `Δx`, energies in `k0 Δx²`. The crate does no I/O.
+//!
+//! ```
+//! use bistable_core::{Params, Simulator, Sinusoid, SolverOptions, Event};
+//! let plate = Sinusoid::new(1.75, 0.07).unwrap();
+//! let mut sim = Simulator::new(Params::paper(), plate.into(), SolverOptions::default()).unwrap();
+//! let events = sim.events_until(20.0).unwrap();
+//! let Event::Impact(second) = events.iter().filter(|e| matches!(e, Event::Impact(_))).nth(1).unwrap()
+//! else { unreachable!() };
+//! assert!((second.phase.unwrap() - 0.0507).abs() < 5e-4);
+//! ```
+#![warn(missing_docs)]
+
+pub mod audit;
+mod chatter;
+pub mod events;
+pub mod params;
+pub mod potential;
+mod roots;
+pub mod shaker;
+pub mod simulator;
+pub mod taylor;
+pub mod time;
+
+pub use audit::GapAudit;
+pub use events::{ContactMode, Event, Impact, StickCause, Well};
+pub use params::{ChatterRule, ParamError, Params, SolverOptions};
+pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
+pub use simulator::{Observer, SimError, Simulator, State, Stats, StepView};
+pub use time::Instant;

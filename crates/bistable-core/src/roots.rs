@@ -1,0 +1,202 @@
+//! First root of a polynomial on an interval, with no root missed.
+//!
+//! The polynomial is converted to the Bernstein basis on the step; by the convex-hull property a
+//! Bernstein polynomial whose coefficients are all positive has no root. Intervals that cannot be
+//! cleared are halved (de Casteljau) left to right, so the first root is isolated first; an
+//! interval whose coefficients change sign exactly once holds exactly one crossing, which is then
+//! polished to the last bit by safeguarded Newton iteration. A minimum that touches zero (grazing)
+//! survives halving down to a width of `2^-44` of the step and is reported as a root there.
+
+use crate::taylor::{eval, eval_d, BUF};
+
+/// Width (as a fraction of the step) below which an uncleared interval is reported as a touch.
+const MIN_WIDTH: f64 = 1.0 / (1u64 << 44) as f64;
+
+/// First `s ∈ (0, h]` with `p(s) ≤ 0`, for `p(s) = Σ c_k s^k` with `c[0] > 0`.
+///
+/// Returns the last double before the crossing at which `p` is still positive (so the located
+/// instant never lies past the root), or `None` if `p > 0` on all of `[0, h]`.
+pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
+    debug_assert!(c[0] > 0.0);
+    let n = c.len() - 1;
+    // Scale to σ ∈ [0, 1]: d_k = c_k h^k.
+    let mut d = [0.0; BUF];
+    let mut hk = 1.0;
+    for (dk, &ck) in d.iter_mut().zip(c) {
+        *dk = ck * hk;
+        hk *= h;
+    }
+    // Cheap certificate: p(σ) ≥ d_0 + Σ min(d_k, 0) on [0, 1].
+    let lower: f64 = d[0] + d[1..=n].iter().map(|&v| v.min(0.0)).sum::<f64>();
+    if lower > 0.0 {
+        return None;
+    }
+    let b = bernstein(&d[..=n]);
+    let mut stack: Vec<(f64, f64, [f64; BUF])> = vec![(0.0, 1.0, b)];
+    while let Some((a, w, b)) = stack.pop() {
+        let b = &b[..=n];
+        if b.iter().all(|&v| v > 0.0) {
+            continue;
+        }
+        if b[0] <= 0.0 {
+            // p(a) ≤ 0 at the left end: the previous interval ended positive, so the crossing
+            // is at a (to within the previous interval's resolution).
+            return Some(polish(c, h, (a - w).max(0.0) * h, a * h));
+        }
+        let changes = b.windows(2).filter(|p| (p[0] > 0.0) != (p[1] > 0.0)).count();
+        if changes == 1 && b[n] <= 0.0 {
+            return Some(polish(c, h, a * h, (a + w) * h));
+        }
+        if w <= MIN_WIDTH {
+            // A minimum within rounding of zero: a grazing contact.
+            let m = b.iter().copied().fold(f64::INFINITY, f64::min);
+            if m <= 0.0 {
+                return Some(((a + 0.5 * w) * h).min(h));
+            }
+            continue;
+        }
+        let (left, right) = split(b);
+        stack.push((a + 0.5 * w, 0.5 * w, right));
+        stack.push((a, 0.5 * w, left));
+    }
+    None
+}
+
+/// Bernstein coefficients of `Σ d_k σ^k` on `[0, 1]`: `b_i = Σ_{k≤i} C(i,k)/C(n,k) d_k`.
+fn bernstein(d: &[f64]) -> [f64; BUF] {
+    let n = d.len() - 1;
+    let mut b = [0.0; BUF];
+    // inv_cnk = 1/C(n,k), updated along k.
+    let mut inv_cnk = 1.0;
+    for (k, &dk) in d.iter().enumerate() {
+        if k > 0 {
+            inv_cnk *= k as f64 / (n + 1 - k) as f64;
+        }
+        // r = C(i,k)/C(n,k), from i = k upward.
+        let mut r = inv_cnk;
+        for (i, bi) in b.iter_mut().enumerate().take(n + 1).skip(k) {
+            if i > k {
+                r *= i as f64 / (i - k) as f64;
+            }
+            *bi += r * dk;
+        }
+    }
+    b
+}
+
+/// De Casteljau split of a Bernstein polynomial at the midpoint.
+fn split(b: &[f64]) -> ([f64; BUF], [f64; BUF]) {
+    let n = b.len() - 1;
+    let mut work = [0.0; BUF];
+    work[..=n].copy_from_slice(b);
+    let mut left = [0.0; BUF];
+    let mut right = [0.0; BUF];
+    left[0] = work[0];
+    right[n] = work[n];
+    for r in 1..=n {
+        for i in 0..=n - r {
+            work[i] = 0.5 * (work[i] + work[i + 1]);
+        }
+        left[r] = work[0];
+        right[n - r] = work[n - r];
+    }
+    (left, right)
+}
+
+/// Shrinks a bracket `[lo, hi]` (in `s`) with `p(lo) > 0 ≥ p(hi)` to adjacent doubles by
+/// Newton steps kept inside the bracket, bisecting when Newton does not halve it; returns `lo`.
+fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64) -> f64 {
+    if eval(c, lo) <= 0.0 {
+        return lo.max(f64::MIN_POSITIVE);
+    }
+    hi = hi.min(h);
+    let mut x = 0.5 * (lo + hi);
+    for _ in 0..200 {
+        let (p, dp) = eval_d(c, x);
+        if p > 0.0 {
+            lo = x;
+        } else {
+            hi = x;
+        }
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            break;
+        }
+        let newton = x - p / dp;
+        let width = hi - lo;
+        x = if newton > lo && newton < hi && (newton - x).abs() < 0.5 * width {
+            newton
+        } else {
+            mid
+        };
+        if x <= lo || x >= hi {
+            x = mid;
+        }
+    }
+    lo
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn poly_from_roots(roots: &[f64], lead: f64) -> Vec<f64> {
+        let mut c = vec![lead];
+        for &r in roots {
+            let mut next = vec![0.0; c.len() + 1];
+            for (k, &ck) in c.iter().enumerate() {
+                next[k + 1] += ck;
+                next[k] -= r * ck;
+            }
+            c = next;
+        }
+        c
+    }
+
+    #[test]
+    fn finds_the_first_of_several_roots() {
+        // (s−0.3)(s−0.31)(s−0.7) · (−1): positive at 0.
+        let c = poly_from_roots(&[0.3, 0.31, 0.7], -1.0);
+        let r = first_root(&c, 1.0).unwrap();
+        // Conditioning: rounding of p (~1e-17) over |p'(0.3)| = 0.004.
+        assert!((r - 0.3).abs() < 1e-14, "{r}");
+        assert!(eval(&c, r) > 0.0);
+        assert!(first_root(&c, 0.29).is_none());
+    }
+
+    #[test]
+    fn finds_a_narrow_dip_between_samples() {
+        // Negative only on (0.5, 0.5 + 1e-9), by at most 2.5e-19 (below the rounding of p):
+        // missed by any sampling, found here to within the √ε accuracy of a near-double root.
+        let c = poly_from_roots(&[0.5, 0.5 + 1e-9], 1.0);
+        let r = first_root(&c, 1.0).unwrap();
+        assert!((r - 0.5).abs() < 1e-8, "{r}");
+        // A dip of depth 1e-12 and width 2e-6: root error = rounding (~5e-17) / slope (2e-6).
+        let c = poly_from_roots(&[0.5, 0.5 + 2e-6], 1.0);
+        let r = first_root(&c, 1.0).unwrap();
+        assert!((r - 0.5).abs() < 1e-10, "{r}");
+    }
+
+    #[test]
+    fn double_root_is_a_touch() {
+        // Grazing: a minimum 1e-14 below zero.
+        let mut c = poly_from_roots(&[0.4, 0.4], 1.0);
+        c[0] -= 1e-14;
+        let r = first_root(&c, 1.0).unwrap();
+        assert!((r - (0.4 - 1e-7)).abs() < 1e-9, "{r}");
+        // Lifted by 1e-10 it does not touch.
+        let mut lifted = c.clone();
+        lifted[0] += 1e-10;
+        assert!(first_root(&lifted, 1.0).is_none());
+    }
+
+    #[test]
+    fn high_degree_polynomial() {
+        // A degree-20 polynomial with its first root at 0.123456789.
+        let mut roots: Vec<f64> = (0..19).map(|i| 0.5 + 0.03 * f64::from(i)).collect();
+        roots.push(0.123456789);
+        let c = poly_from_roots(&roots, 1.0);
+        let r = first_root(&c, 0.9).unwrap();
+        assert!((r - 0.123456789).abs() < 1e-15, "{r}");
+    }
+}

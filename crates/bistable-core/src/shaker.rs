@@ -1,0 +1,268 @@
+//! Prescribed plate motion `z(τ)`: the shaker's sinusoid, or a polynomial piece given from outside.
+//!
+//! The integrator needs the plate's normalised Taylor coefficients `z_k = z^(k)(τ)/k!` at the start
+//! of each step; both kinds provide them exactly (up to rounding).
+
+use crate::params::{check, ParamError};
+use crate::time::Instant;
+
+/// Highest polynomial degree accepted for an external plate piece.
+pub const MAX_POLY_DEGREE: usize = 5;
+
+/// Sinusoidal shaker: `ż = V cos(Ω(τ−τs) + φs)`, `z = zs + (V/Ω) sin(Ω(τ−τs) + φs)`.
+///
+/// The default origin (`τs = 0`, `φs = 0`, `zs = 0`) is the paper's shaker: `z = (V/Ω) sin(Ωτ)`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sinusoid {
+    omega: f64,
+    velocity: f64,
+    origin: Instant,
+    phase0: f64,
+    offset: f64,
+}
+
+impl Sinusoid {
+    /// Frequency ratio `Ω > 0` and velocity amplitude `V ≥ 0` (both nondimensional).
+    pub fn new(omega: f64, velocity: f64) -> Result<Self, ParamError> {
+        Ok(Self {
+            omega: check("omega", omega, omega > 0.0, "must be finite and > 0")?,
+            velocity: check("velocity", velocity, velocity >= 0.0, "must be finite and >= 0")?,
+            origin: Instant::new(0.0),
+            phase0: 0.0,
+            offset: 0.0,
+        })
+    }
+
+    /// The same sinusoid with phase `phase0` (radians) at instant `origin` and mean position
+    /// `offset`. Used to switch shaker settings without a jump in plate position.
+    pub fn with_origin(
+        mut self,
+        origin: Instant,
+        phase0: f64,
+        offset: f64,
+    ) -> Result<Self, ParamError> {
+        check("origin", origin.to_f64(), true, "must be finite")?;
+        self.phase0 = check("phase0", phase0, true, "must be finite")?;
+        self.offset = check("offset", offset, true, "must be finite")?;
+        self.origin = origin;
+        Ok(self)
+    }
+
+    /// `Ω`.
+    pub fn omega(&self) -> f64 {
+        self.omega
+    }
+
+    /// `V`.
+    pub fn velocity(&self) -> f64 {
+        self.velocity
+    }
+
+    /// Shaker period `2π/Ω`.
+    pub fn period(&self) -> f64 {
+        std::f64::consts::TAU / self.omega
+    }
+
+    /// Phase angle `Ω(τ−τs) + φs` reduced to `[−π, π)`.
+    pub fn angle(&self, t: Instant) -> f64 {
+        t.angle(self.origin, self.omega, self.phase0)
+    }
+
+    /// Phase in cycles, in `[0, 1)` (the paper's `φ/2π`, Eq. 12).
+    pub fn phase_cycles(&self, t: Instant) -> f64 {
+        let c = self.angle(t) / std::f64::consts::TAU;
+        let c = if c < 0.0 { c + 1.0 } else { c };
+        if c >= 1.0 {
+            0.0
+        } else {
+            c
+        }
+    }
+
+    fn series(&self, t: Instant, out: &mut [f64]) {
+        let (s, c) = self.angle(t).sin_cos();
+        // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
+        let cycle = [s, c, -s, -c];
+        let mut a = self.velocity / self.omega;
+        for (k, o) in out.iter_mut().enumerate() {
+            if k > 0 {
+                a *= self.omega / k as f64;
+            }
+            *o = a * cycle[k % 4];
+        }
+        out[0] += self.offset;
+    }
+}
+
+/// Plate motion given as a polynomial in `τ − start`, valid on `[start, end]`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PolyPiece {
+    start: Instant,
+    end: Instant,
+    coeffs: [f64; MAX_POLY_DEGREE + 1],
+}
+
+impl PolyPiece {
+    /// `z(τ) = Σ c_k (τ − start)^k` for `τ ∈ [start, end]`, degree ≤ [`MAX_POLY_DEGREE`],
+    /// all coefficients finite, `end > start`.
+    pub fn new(start: Instant, end: Instant, coeffs: &[f64]) -> Result<Self, ParamError> {
+        check("plate_coefficients", coeffs.len() as f64, coeffs.len() <= MAX_POLY_DEGREE + 1,
+            "at most 6 coefficients (degree 5)")?;
+        let mut c = [0.0; MAX_POLY_DEGREE + 1];
+        for (dst, &src) in c.iter_mut().zip(coeffs) {
+            *dst = check("plate_coefficient", src, true, "must be finite")?;
+        }
+        let len = end.since(start);
+        check("plate_piece_length", len, len > 0.0, "end must be after start")?;
+        Ok(Self {
+            start,
+            end,
+            coeffs: c,
+        })
+    }
+
+    /// A cubic through `(z0, zd0)` at `start` and `(z1, zd1)` at `end` (Hermite interpolation).
+    pub fn hermite(
+        start: Instant,
+        end: Instant,
+        (z0, zd0): (f64, f64),
+        (z1, zd1): (f64, f64),
+    ) -> Result<Self, ParamError> {
+        let h = end.since(start);
+        check("plate_piece_length", h, h > 0.0, "end must be after start")?;
+        let d = (z1 - z0) / h;
+        let c2 = (3.0 * d - 2.0 * zd0 - zd1) / h;
+        let c3 = (zd0 + zd1 - 2.0 * d) / (h * h);
+        Self::new(start, end, &[z0, zd0, c2, c3])
+    }
+
+    /// Instant from which the piece is valid.
+    pub fn start(&self) -> Instant {
+        self.start
+    }
+
+    /// Instant up to which the piece is valid.
+    pub fn end(&self) -> Instant {
+        self.end
+    }
+
+    fn series(&self, t: Instant, out: &mut [f64]) {
+        // Taylor shift of the polynomial to s = t − start.
+        let s = t.since(self.start);
+        out.iter_mut().for_each(|o| *o = 0.0);
+        let mut c = self.coeffs;
+        let n = c.len();
+        for (k, o) in out.iter_mut().enumerate().take(n) {
+            // After pass k, c[k] holds the k-th coefficient at s (synthetic division).
+            for j in (k..n - 1).rev() {
+                c[j] += s * c[j + 1];
+            }
+            *o = c[k];
+        }
+    }
+}
+
+/// What the plate does.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum PlateMotion {
+    /// The shaker's sinusoid, valid forever.
+    Sinusoid(Sinusoid),
+    /// An external piece, valid up to its end.
+    Poly(PolyPiece),
+}
+
+impl PlateMotion {
+    /// Normalised Taylor coefficients `z_k = z^(k)(t)/k!` for `k < out.len()`.
+    pub fn series(&self, t: Instant, out: &mut [f64]) {
+        match self {
+            PlateMotion::Sinusoid(s) => s.series(t, out),
+            PlateMotion::Poly(p) => p.series(t, out),
+        }
+    }
+
+    /// Position, velocity and acceleration `(z, ż, z̈)` at `t`.
+    pub fn motion(&self, t: Instant) -> (f64, f64, f64) {
+        let mut c = [0.0; 3];
+        self.series(t, &mut c);
+        (c[0], c[1], 2.0 * c[2])
+    }
+
+    /// Last instant at which the motion is defined (`None`: forever).
+    pub fn horizon(&self) -> Option<Instant> {
+        match self {
+            PlateMotion::Sinusoid(_) => None,
+            PlateMotion::Poly(p) => Some(p.end),
+        }
+    }
+
+    /// Impact phase in cycles for a periodic shaker, `None` otherwise.
+    pub fn phase_cycles(&self, t: Instant) -> Option<f64> {
+        match self {
+            PlateMotion::Sinusoid(s) => Some(s.phase_cycles(t)),
+            PlateMotion::Poly(_) => None,
+        }
+    }
+}
+
+impl From<Sinusoid> for PlateMotion {
+    fn from(s: Sinusoid) -> Self {
+        PlateMotion::Sinusoid(s)
+    }
+}
+
+impl From<PolyPiece> for PlateMotion {
+    fn from(p: PolyPiece) -> Self {
+        PlateMotion::Poly(p)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sinusoid_series_matches_closed_form() {
+        let s = Sinusoid::new(1.75, 0.07).unwrap();
+        let t = 3.2_f64;
+        let mut c = [0.0; 6];
+        PlateMotion::from(s).series(Instant::new(t), &mut c);
+        let a = 0.07 / 1.75;
+        assert!((c[0] - a * (1.75 * t).sin()).abs() < 1e-16);
+        assert!((c[1] - 0.07 * (1.75 * t).cos()).abs() < 1e-16);
+        assert!((c[2] - (-0.07 * 1.75 * (1.75 * t).sin() / 2.0)).abs() < 1e-16);
+        assert!(Sinusoid::new(0.0, 0.1).is_err());
+        assert_eq!(Sinusoid::new(1.0, -0.1).unwrap_err().name, "velocity");
+    }
+
+    #[test]
+    fn phase_stays_exact_at_long_times() {
+        // frac(Ωτ/2π) for exactly representable Ω and τ, from 60-digit decimal arithmetic.
+        for (omega, tau, expected) in [
+            (2.0, 130_000.25, 0.364_781_364_333_247_577_662_918_735_4),
+            (1.75, 125_663.5, 0.942_584_649_681_671_187_968_397_483_4),
+        ] {
+            let ph = Sinusoid::new(omega, 0.07).unwrap().phase_cycles(Instant::new(tau));
+            let d = (ph - expected).abs();
+            assert!(d.min(1.0 - d) < 1e-13, "Ω={omega}: {ph} vs {expected}");
+        }
+    }
+
+    #[test]
+    fn poly_shift_and_hermite() {
+        let p = PolyPiece::new(Instant::new(1.0), Instant::new(2.0), &[1.0, 2.0, 3.0, 4.0]).unwrap();
+        let mut c = [0.0; 5];
+        PlateMotion::from(p).series(Instant::new(1.5), &mut c);
+        // z(s) = 1 + 2s + 3s² + 4s³ at s = 0.5 and its derivatives / k!.
+        assert!((c[0] - (1.0 + 1.0 + 0.75 + 0.5)).abs() < 1e-15);
+        assert!((c[1] - (2.0 + 3.0 + 3.0)).abs() < 1e-15);
+        assert!((c[2] - (3.0 + 6.0)).abs() < 1e-15);
+        assert!((c[3] - 4.0).abs() < 1e-15);
+        assert_eq!(c[4], 0.0);
+        let h = PolyPiece::hermite(Instant::new(0.0), Instant::new(2.0), (1.0, -1.0), (3.0, 0.5))
+            .unwrap();
+        let m = PlateMotion::from(h).motion(Instant::new(2.0));
+        assert!((m.0 - 3.0).abs() < 1e-14 && (m.1 - 0.5).abs() < 1e-14);
+        assert!(PolyPiece::new(Instant::new(1.0), Instant::new(1.0), &[0.0]).is_err());
+        assert!(PolyPiece::new(Instant::new(0.0), Instant::new(1.0), &[f64::NAN]).is_err());
+    }
+}

@@ -1,0 +1,768 @@
+//! The event-driven simulator: Taylor steps in free flight and while stuck, every event located
+//! as a polynomial root, and dense output between events.
+//!
+//! Each step is computed from the state at its start and ends at the first event in it (impact,
+//! release, snap-through) or at the step size the tolerance allows. Requests for the state at a
+//! time inside a step evaluate that step's polynomial: asking for output never restarts the
+//! integration, so the trajectory does not depend on when it is observed.
+
+use std::fmt;
+use std::ops::ControlFlow;
+
+use crate::chatter;
+use crate::events::{ContactMode, Event, Impact, StickCause, Well};
+use crate::params::{check, ParamError, Params, SolverOptions};
+use crate::potential::{self, BARRIER};
+use crate::roots::first_root;
+use crate::shaker::PlateMotion;
+use crate::taylor::{self, eval, eval_d, order_for, BUF};
+use crate::time::Instant;
+
+/// Why a run could not go on. The simulator stays usable at its last consistent state.
+#[derive(Debug, Clone, PartialEq)]
+pub enum SimError {
+    /// The requested time is before the current one.
+    BackwardTime {
+        /// Current time.
+        now: f64,
+        /// Requested time.
+        requested: f64,
+    },
+    /// The plate motion is not defined that far (an external piece ends earlier).
+    BeyondPlate {
+        /// Last instant with a defined plate motion.
+        horizon: f64,
+        /// Requested time.
+        requested: f64,
+    },
+    /// A new plate motion would move the plate by a jump.
+    PlateJump {
+        /// Instant of the switch.
+        t: f64,
+        /// Plate position before.
+        from: f64,
+        /// Plate position after.
+        to: f64,
+    },
+    /// The Zeno guard stopped an unending chatter sequence while the plate pulls away.
+    Zeno {
+        /// Instant.
+        t: f64,
+        /// Impacts in the sequence.
+        impacts: u32,
+    },
+    /// The solution left the range of doubles (parameters far outside the model's scope).
+    NonFinite {
+        /// Instant of the step that overflowed.
+        t: f64,
+    },
+    /// A rejected parameter or initial state.
+    Param(ParamError),
+}
+
+impl fmt::Display for SimError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        match self {
+            SimError::BackwardTime { now, requested } => {
+                write!(f, "cannot go back in time from t={now} to t={requested}")
+            }
+            SimError::BeyondPlate { horizon, requested } => write!(
+                f,
+                "plate motion is defined up to t={horizon}, cannot advance to t={requested}"
+            ),
+            SimError::PlateJump { t, from, to } => write!(
+                f,
+                "new plate motion jumps at t={t} from z={from} to z={to}; plate position must be continuous"
+            ),
+            SimError::Zeno { t, impacts } => write!(
+                f,
+                "chatter did not end after {impacts} impacts at t={t} (Zeno guard) and the contact force is negative"
+            ),
+            SimError::NonFinite { t } => {
+                write!(f, "solution is no longer finite at t={t}; parameters out of scope")
+            }
+            SimError::Param(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for SimError {}
+
+impl From<ParamError> for SimError {
+    fn from(e: ParamError) -> Self {
+        SimError::Param(e)
+    }
+}
+
+/// Mass and plate at one instant. Lengths in `Δx`, velocities in `ω0 Δx`, energies in `k0 Δx²`.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct State {
+    /// Time.
+    pub t: f64,
+    /// Mass position.
+    pub x: f64,
+    /// Mass velocity.
+    pub v: f64,
+    /// Plate position.
+    pub z: f64,
+    /// Plate velocity.
+    pub zdot: f64,
+    /// Free flight or riding on the plate.
+    pub mode: ContactMode,
+    /// Well the mass is in.
+    pub well: Well,
+}
+
+impl State {
+    /// `v²/2`.
+    pub fn kinetic_energy(&self) -> f64 {
+        potential::kinetic(self.v)
+    }
+
+    /// `U(x)`.
+    pub fn potential_energy(&self) -> f64 {
+        potential::energy(self.x)
+    }
+
+    /// Gap `x − z ≥ 0`.
+    pub fn gap(&self) -> f64 {
+        self.x - self.z
+    }
+}
+
+/// Counters of the work done.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct Stats {
+    /// Taylor steps taken (free and stuck).
+    pub steps: u64,
+    /// Impacts.
+    pub impacts: u64,
+    /// Sticking intervals begun.
+    pub sticks: u64,
+    /// Barrier crossings.
+    pub snap_throughs: u64,
+}
+
+/// Receives events (and, for audits, every step) while the simulator advances.
+pub trait Observer {
+    /// Called for each event in time order; `Break` stops the advance at that event.
+    fn event(&mut self, _event: &Event) -> ControlFlow<()> {
+        ControlFlow::Continue(())
+    }
+
+    /// Called once for each step when it is computed.
+    fn step(&mut self, _step: &StepView<'_>) {}
+}
+
+impl<F: FnMut(&Event)> Observer for F {
+    fn event(&mut self, event: &Event) -> ControlFlow<()> {
+        self(event);
+        ControlFlow::Continue(())
+    }
+}
+
+/// A computed step, for audits: the mass position as a polynomial over `[t0, t0 + len]`.
+pub struct StepView<'a> {
+    start: Instant,
+    len: f64,
+    riding: bool,
+    x: &'a [f64],
+    plate: &'a PlateMotion,
+}
+
+impl StepView<'_> {
+    /// Start of the step.
+    pub fn t0(&self) -> f64 {
+        self.start.to_f64()
+    }
+
+    /// Length of the step (time units).
+    pub fn len(&self) -> f64 {
+        self.len
+    }
+
+    /// Whether the step has zero length (an event at its start).
+    pub fn is_empty(&self) -> bool {
+        self.len == 0.0
+    }
+
+    /// Whether the mass rides on the plate during the step.
+    pub fn riding(&self) -> bool {
+        self.riding
+    }
+
+    /// Gap `x − z` at `t0 + s`, with the plate evaluated directly (not from the step's series).
+    pub fn gap_at(&self, s: f64) -> f64 {
+        let t = self.start.add(s);
+        let z = self.plate.motion(t).0;
+        if self.riding {
+            0.0
+        } else {
+            eval(self.x, s) - z
+        }
+    }
+}
+
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum StepEnd {
+    /// Nothing happens at the end; the next step continues the motion.
+    Plain,
+    /// The gap closes.
+    Impact,
+    /// `x = ½`.
+    Barrier,
+    /// The contact force turns negative.
+    Release,
+    /// A chatter sequence accumulates (or the mass is pushed with no relative velocity).
+    Stick(StickCause),
+}
+
+#[derive(Clone)]
+struct Step {
+    len: f64,
+    end: StepEnd,
+    /// The mass rides on the plate (sticking, or the tail of a chatter sequence).
+    riding: bool,
+    x: [f64; BUF],
+    u: [f64; BUF],
+}
+
+/// The event-driven simulator (see the module documentation).
+#[derive(Clone)]
+pub struct Simulator {
+    params: Params,
+    opts: SolverOptions,
+    plate: PlateMotion,
+    order: usize,
+    /// Start of the current step and the state there.
+    t0: Instant,
+    mode: ContactMode,
+    u0: f64,
+    w0: f64,
+    /// Leading coefficients of the event function (gap in free flight, contact force while
+    /// stuck) known to vanish exactly at `t0`: they are set to zero and divided out.
+    pinned: usize,
+    on_barrier: bool,
+    well: Well,
+    step: Option<Step>,
+    /// Observation time, `t0 ≤ now ≤ t0 + step.len`.
+    now: Instant,
+    last_impact: Option<Impact>,
+    last_impact_t: Option<Instant>,
+    short_flights: u32,
+    stats: Stats,
+}
+
+/// Flights shorter than this count towards the Zeno guard (time units).
+const SHORT_FLIGHT: f64 = 1e-6;
+
+impl Simulator {
+    /// The paper's initial condition: mass at rest at `x = 0`, `τ = 0`. With the paper's shaker the
+    /// plate meets it moving up, so impact 0 happens at `τ = 0`.
+    pub fn new(params: Params, plate: PlateMotion, opts: SolverOptions) -> Result<Self, SimError> {
+        Self::with_state(params, plate, opts, 0.0, 0.0, 0.0)
+    }
+
+    /// Mass at `x0` with velocity `v0` at time `t0`; `x0` must not be below the plate.
+    pub fn with_state(
+        params: Params,
+        plate: PlateMotion,
+        opts: SolverOptions,
+        t0: f64,
+        x0: f64,
+        v0: f64,
+    ) -> Result<Self, SimError> {
+        check("t0", t0, true, "must be finite")?;
+        check("x0", x0, true, "must be finite")?;
+        check("v0", v0, true, "must be finite")?;
+        let start = Instant::new(t0);
+        if let Some(h) = plate.horizon() {
+            if h < start {
+                return Err(SimError::BeyondPlate {
+                    horizon: h.to_f64(),
+                    requested: t0,
+                });
+            }
+        }
+        let (z, zd, _) = plate.motion(start);
+        let u0 = x0 - z;
+        check("x0", x0, u0 >= 0.0, "must not be below the plate (x0 >= z(t0))")?;
+        Ok(Self {
+            params,
+            opts,
+            plate,
+            order: order_for(opts.tol()),
+            t0: start,
+            mode: ContactMode::Free,
+            u0,
+            w0: v0 - zd,
+            pinned: usize::from(u0 == 0.0),
+            on_barrier: x0 == BARRIER,
+            well: Well::of(x0),
+            step: None,
+            now: start,
+            last_impact: None,
+            last_impact_t: None,
+            short_flights: 0,
+            stats: Stats::default(),
+        })
+    }
+
+    /// Model parameters.
+    pub fn params(&self) -> &Params {
+        &self.params
+    }
+
+    /// Solver options.
+    pub fn options(&self) -> &SolverOptions {
+        &self.opts
+    }
+
+    /// Current plate motion.
+    pub fn plate(&self) -> &PlateMotion {
+        &self.plate
+    }
+
+    /// Taylor order in use.
+    pub fn order(&self) -> usize {
+        self.order
+    }
+
+    /// Current time.
+    pub fn time(&self) -> f64 {
+        self.now.to_f64()
+    }
+
+    /// Current time in full (two-double) precision.
+    pub fn instant(&self) -> Instant {
+        self.now
+    }
+
+    /// Work counters.
+    pub fn stats(&self) -> Stats {
+        self.stats
+    }
+
+    /// The last impact so far.
+    pub fn last_impact(&self) -> Option<Impact> {
+        self.last_impact
+    }
+
+    /// State at the current time.
+    pub fn state(&self) -> State {
+        let s = self.now.since(self.t0);
+        let (z, zdot, _) = self.plate.motion(self.now);
+        let riding = match &self.step {
+            Some(step) => step.riding,
+            None => self.mode == ContactMode::Sticking,
+        };
+        let (x, v, mode) = if riding {
+            (z, zdot, ContactMode::Sticking)
+        } else {
+            match &self.step {
+                Some(step) if s > 0.0 => {
+                    let (x, v) = eval_d(&step.x[..=self.order], s);
+                    (x, v, ContactMode::Free)
+                }
+                _ => (self.u0 + z, self.w0 + zdot, ContactMode::Free),
+            }
+        };
+        State {
+            t: self.now.to_f64(),
+            x,
+            v,
+            z,
+            zdot,
+            mode,
+            well: self.well,
+        }
+    }
+
+    /// Advances to `t`, reporting events to `on_event` (a closure `FnMut(&Event)` will do).
+    /// Events at exactly `t` are included.
+    pub fn advance_to(&mut self, t: f64, on_event: &mut impl Observer) -> Result<(), SimError> {
+        self.advance(t, on_event).map(|_| ())
+    }
+
+    /// Advances to `t` or until the observer answers `Break` to an event; returns whether `t`
+    /// was reached (`true`) or the observer stopped the run at the current time (`false`).
+    pub fn advance(&mut self, t: f64, obs: &mut impl Observer) -> Result<bool, SimError> {
+        check("t", t, true, "must be finite")?;
+        let target = Instant::new(t);
+        if target < self.now {
+            return Err(SimError::BackwardTime {
+                now: self.time(),
+                requested: t,
+            });
+        }
+        if let Some(h) = self.plate.horizon() {
+            if h < target {
+                return Err(SimError::BeyondPlate {
+                    horizon: h.to_f64(),
+                    requested: t,
+                });
+            }
+        }
+        let mut empty_steps = 0u32;
+        loop {
+            if self.step.is_none() {
+                let step = self.compute_step()?;
+                self.stats.steps += 1;
+                obs.step(&StepView {
+                    start: self.t0,
+                    len: step.len,
+                    riding: step.riding,
+                    x: &step.x[..=self.order],
+                    plate: &self.plate,
+                });
+                self.step = Some(step);
+            }
+            let (len, end) = self.step.as_ref().map_or((0.0, StepEnd::Plain), |s| (s.len, s.end));
+            if len == 0.0 && end == StepEnd::Plain {
+                // Only at the end of an external plate piece.
+                self.now = target;
+                return Ok(true);
+            }
+            let step_end = self.t0.add(len);
+            if step_end > target {
+                self.now = target;
+                return Ok(true);
+            }
+            empty_steps = if len == 0.0 { empty_steps + 1 } else { 0 };
+            if empty_steps > 8 {
+                return Err(SimError::NonFinite { t: self.time() });
+            }
+            let flow = self.finish_step(obs)?;
+            self.now = self.t0;
+            if flow.is_break() {
+                return Ok(false);
+            }
+        }
+    }
+
+    /// Switches the plate motion at the current time. The new motion must continue the plate
+    /// position (within `1e-12` relative); the integration restarts here.
+    pub fn set_plate(&mut self, plate: PlateMotion) -> Result<(), SimError> {
+        let now = self.now;
+        if let Some(h) = plate.horizon() {
+            if h < now {
+                return Err(SimError::BeyondPlate {
+                    horizon: h.to_f64(),
+                    requested: now.to_f64(),
+                });
+            }
+        }
+        let st = self.state();
+        let (z, zd, _) = plate.motion(now);
+        if (z - st.z).abs() > 1e-12 * st.z.abs().max(1.0) || !z.is_finite() {
+            return Err(SimError::PlateJump {
+                t: now.to_f64(),
+                from: st.z,
+                to: z,
+            });
+        }
+        self.plate = plate;
+        self.t0 = now;
+        if st.mode == ContactMode::Free {
+            self.u0 = (st.x - z).max(0.0);
+            self.w0 = st.v - zd;
+            self.pinned = usize::from(self.u0 == 0.0);
+        } else if self.mode == ContactMode::Free {
+            // In the accumulated tail of a chatter sequence: on the plate, no relative velocity.
+            self.u0 = 0.0;
+            self.w0 = 0.0;
+            self.pinned = 2;
+        } else {
+            self.pinned = 0;
+        }
+        self.on_barrier = false;
+        self.step = None;
+        Ok(())
+    }
+
+    /// Advances to `t` and returns the events on the way.
+    pub fn events_until(&mut self, t: f64) -> Result<Vec<Event>, SimError> {
+        let mut out = Vec::new();
+        self.advance_to(t, &mut |e: &Event| out.push(*e))?;
+        Ok(out)
+    }
+
+    fn compute_step(&self) -> Result<Step, SimError> {
+        let p = self.order;
+        let mut z = [0.0; BUF];
+        self.plate.series(self.t0, &mut z[..p + 3]);
+        let room = self
+            .plate
+            .horizon()
+            .map_or(f64::INFINITY, |h| h.since(self.t0).max(0.0));
+        let nonfinite = SimError::NonFinite { t: self.t0.to_f64() };
+        match self.mode {
+            ContactMode::Free => {
+                let s = taylor::flight(self.params.zeta(), self.u0, self.w0, &z, p);
+                if !s.x[..=p].iter().all(|c| c.is_finite()) {
+                    return Err(nonfinite);
+                }
+                let mut gap = s.u;
+                gap[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
+                let gap = &gap[..=p];
+                let m = gap.iter().position(|&c| c != 0.0);
+                let instant = |end| Step {
+                    len: 0.0,
+                    end,
+                    riding: false,
+                    x: s.x,
+                    u: s.u,
+                };
+                match m {
+                    // The mass rests exactly on a plate that exerts no force: stuck.
+                    None => return Ok(instant(StepEnd::Stick(StickCause::Plastic))),
+                    Some(0) if gap[0] < 0.0 => return Err(nonfinite),
+                    Some(1) if gap[1] < 0.0 => return Ok(instant(StepEnd::Impact)),
+                    Some(_) if gap[m.unwrap_or(0)] < 0.0 => {
+                        return Ok(instant(StepEnd::Stick(StickCause::Plastic)))
+                    }
+                    _ => {}
+                }
+                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, self.opts.tol()).min(room);
+                if !(h >= 0.0) {
+                    return Err(nonfinite);
+                }
+                let mut len = h;
+                let mut end = StepEnd::Plain;
+                if let Some(r) = first_root(&gap[m.unwrap_or(0)..], h) {
+                    len = r;
+                    end = StepEnd::Impact;
+                }
+                if let Some(r) = self.barrier_root(&s.x[..=p], len) {
+                    len = r;
+                    end = StepEnd::Barrier;
+                }
+                Ok(Step {
+                    len,
+                    end,
+                    riding: false,
+                    x: s.x,
+                    u: s.u,
+                })
+            }
+            ContactMode::Sticking => {
+                let mut n = taylor::contact_force(self.params.zeta(), &z, p);
+                if !n[..=p].iter().all(|c| c.is_finite()) {
+                    return Err(nonfinite);
+                }
+                n[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
+                let n = &n[..=p];
+                let m = n.iter().position(|&c| c != 0.0);
+                let mut step = Step {
+                    len: 0.0,
+                    end: StepEnd::Release,
+                    riding: true,
+                    x: z,
+                    u: [0.0; BUF],
+                };
+                if let Some(m) = m {
+                    if n[m] < 0.0 {
+                        return Ok(step);
+                    }
+                }
+                let h = taylor::step_size(&[&z[..=p], n], p, self.opts.tol()).min(room);
+                if !(h >= 0.0) {
+                    return Err(nonfinite);
+                }
+                step.len = h;
+                step.end = StepEnd::Plain;
+                if let Some(m) = m {
+                    if let Some(r) = first_root(&n[m..], h) {
+                        step.len = r;
+                        step.end = StepEnd::Release;
+                    }
+                }
+                if let Some(r) = self.barrier_root(&z[..=p], step.len) {
+                    step.len = r;
+                    step.end = StepEnd::Barrier;
+                }
+                Ok(step)
+            }
+        }
+    }
+
+    /// First crossing of `x = ½` out of the current well within `(0, h]`.
+    fn barrier_root(&self, x: &[f64], h: f64) -> Option<f64> {
+        let sign = if self.well == Well::Two { 1.0 } else { -1.0 };
+        let mut g = [0.0; BUF];
+        for (gk, &xk) in g.iter_mut().zip(x) {
+            *gk = sign * xk;
+        }
+        g[0] = if self.on_barrier {
+            0.0
+        } else {
+            sign * (x[0] - BARRIER)
+        };
+        let g = &g[..x.len()];
+        let m = g.iter().position(|&c| c != 0.0)?;
+        if g[m] < 0.0 {
+            // Leaving the barrier back into the other well right away.
+            return Some(0.0);
+        }
+        first_root(&g[m..], h)
+    }
+
+    /// Completes the current step: moves to its end and applies what happens there.
+    fn finish_step(&mut self, obs: &mut impl Observer) -> Result<ControlFlow<()>, SimError> {
+        let Some(step) = self.step.take() else {
+            return Ok(ControlFlow::Continue(()));
+        };
+        let p = self.order;
+        let t1 = self.t0.add(step.len);
+        self.t0 = t1;
+        self.on_barrier = false;
+        if step.riding {
+            self.pinned = 0;
+            return Ok(match step.end {
+                StepEnd::Release => {
+                    self.mode = ContactMode::Free;
+                    self.u0 = 0.0;
+                    self.w0 = 0.0;
+                    // Gap, its rate and (at the root of N) its curvature vanish.
+                    self.pinned = 3;
+                    let (z, zd, _) = self.plate.motion(t1);
+                    obs.event(&Event::StickEnd {
+                        t: t1.to_f64(),
+                        x: z,
+                        v: zd,
+                    })
+                }
+                StepEnd::Barrier => self.cross_barrier(t1, obs),
+                StepEnd::Stick(cause) => self.stick(t1, cause, false, obs),
+                StepEnd::Plain | StepEnd::Impact => ControlFlow::Continue(()),
+            });
+        }
+        let (u1, w1) = if step.len == 0.0 {
+            (self.u0, self.w0)
+        } else {
+            eval_d(&step.u[..=p], step.len)
+        };
+        if !(u1.is_finite() && w1.is_finite()) {
+            return Err(SimError::NonFinite { t: t1.to_f64() });
+        }
+        let just_released = self.pinned >= 3;
+        self.u0 = u1.max(0.0);
+        self.w0 = w1;
+        self.pinned = usize::from(self.u0 == 0.0);
+        Ok(match step.end {
+            StepEnd::Plain => ControlFlow::Continue(()),
+            StepEnd::Barrier => self.cross_barrier(t1, obs),
+            StepEnd::Impact => return self.impact(t1, w1.min(0.0), obs),
+            StepEnd::Stick(cause) => self.stick(t1, cause, just_released, obs),
+            StepEnd::Release => ControlFlow::Continue(()),
+        })
+    }
+
+    fn cross_barrier(&mut self, t1: Instant, obs: &mut impl Observer) -> ControlFlow<()> {
+        self.well = self.well.other();
+        self.on_barrier = true;
+        self.stats.snap_throughs += 1;
+        let v = match self.mode {
+            ContactMode::Free => self.w0 + self.plate.motion(t1).1,
+            ContactMode::Sticking => self.plate.motion(t1).1,
+        };
+        obs.event(&Event::SnapThrough {
+            t: t1.to_f64(),
+            v,
+            to: self.well,
+        })
+    }
+
+    /// Puts the mass on the plate at `t1`. `pin_force`: the contact force is zero there (a
+    /// release that only touched `N = 0`), so its root is not found again.
+    fn stick(
+        &mut self,
+        t1: Instant,
+        cause: StickCause,
+        pin_force: bool,
+        obs: &mut impl Observer,
+    ) -> ControlFlow<()> {
+        self.pinned = usize::from(pin_force);
+        self.mode = ContactMode::Sticking;
+        self.stats.sticks += 1;
+        self.short_flights = 0;
+        obs.event(&Event::StickStart {
+            t: t1.to_f64(),
+            x: self.plate.motion(t1).0,
+            cause,
+            impacts: self.stats.impacts,
+        })
+    }
+
+    /// Applies the impact law at `t1` with incoming relative velocity `w_minus ≤ 0`.
+    fn impact(
+        &mut self,
+        t1: Instant,
+        w_minus: f64,
+        obs: &mut impl Observer,
+    ) -> Result<ControlFlow<()>, SimError> {
+        let e = self.params.restitution();
+        let (z, zd, zdd) = self.plate.motion(t1);
+        let w_plus = -e * w_minus;
+        let v_before = w_minus + zd;
+        let v_after = w_plus + zd;
+        let imp = Impact {
+            index: self.stats.impacts,
+            t: t1.to_f64(),
+            phase: self.plate.phase_cycles(t1),
+            x: z,
+            v_before,
+            v_after,
+            zdot: zd,
+            delta_k: 0.5 * (v_after * v_after - v_before * v_before),
+        };
+        self.stats.impacts += 1;
+        self.last_impact = Some(imp);
+        let since = self.last_impact_t.map(|p| t1.since(p));
+        self.last_impact_t = Some(t1);
+        self.short_flights = match since {
+            Some(d) if d < SHORT_FLIGHT => self.short_flights + 1,
+            _ => 0,
+        };
+        self.u0 = 0.0;
+        self.w0 = w_plus;
+        self.pinned = if w_plus == 0.0 { 2 } else { 1 };
+        let force = zdd + 2.0 * self.params.zeta() * zd + potential::force(z);
+        let decision = chatter::decide(
+            self.opts.chatter(),
+            e,
+            w_plus,
+            force,
+            since,
+            self.short_flights >= self.opts.max_chatter_impacts(),
+        );
+        if obs.event(&Event::Impact(imp)).is_break() {
+            // Stopped at the impact: the chatter decision is taken again at the next step.
+            self.pending_decision(decision);
+            return Ok(ControlFlow::Break(()));
+        }
+        self.pending_decision(decision);
+        match decision {
+            chatter::Decision::Zeno => Err(SimError::Zeno {
+                t: t1.to_f64(),
+                impacts: self.short_flights,
+            }),
+            _ => Ok(ControlFlow::Continue(())),
+        }
+    }
+
+    /// Turns a chatter decision into the next step: a tail on the plate ending in sticking.
+    fn pending_decision(&mut self, decision: chatter::Decision) {
+        let (len, cause) = match decision {
+            chatter::Decision::Fly | chatter::Decision::Zeno => return,
+            chatter::Decision::StickAfter(len, cause) => (len, cause),
+        };
+        self.step = Some(Step {
+            len,
+            end: StepEnd::Stick(cause),
+            riding: true,
+            x: [0.0; BUF],
+            u: [0.0; BUF],
+        });
+    }
+}
