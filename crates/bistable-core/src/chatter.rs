@@ -91,12 +91,18 @@ mod tests {
             decide(rule, 0.85, 1e-5, 0.0, Some(5e-10), false),
             Decision::StickAfter(0.0, StickCause::FixedGap)
         );
-        assert_eq!(decide(rule, 0.85, 1e-5, 0.1, Some(2e-9), false), Decision::Fly);
+        assert_eq!(
+            decide(rule, 0.85, 1e-5, 0.1, Some(2e-9), false),
+            Decision::Fly
+        );
         assert_eq!(
             decide(rule, 0.0, 0.0, 0.1, None, false),
             Decision::StickAfter(0.0, StickCause::Plastic)
         );
-        assert_eq!(decide(rule, 0.9, 1e-5, -0.1, Some(2e-9), true), Decision::Zeno);
+        assert_eq!(
+            decide(rule, 0.9, 1e-5, -0.1, Some(2e-9), true),
+            Decision::Zeno
+        );
         assert_eq!(
             decide(rule, 0.9, 1e-5, 0.1, Some(2e-9), true),
             Decision::StickAfter(0.0, StickCause::ZenoGuard)

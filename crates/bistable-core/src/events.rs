@@ -122,7 +122,9 @@ impl Event {
     pub fn t(&self) -> f64 {
         match *self {
             Event::Impact(i) => i.t,
-            Event::StickStart { t, .. } | Event::StickEnd { t, .. } | Event::SnapThrough { t, .. } => t,
+            Event::StickStart { t, .. }
+            | Event::StickEnd { t, .. }
+            | Event::SnapThrough { t, .. } => t,
         }
     }
 }

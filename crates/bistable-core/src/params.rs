@@ -106,7 +106,12 @@ impl ChatterRule {
     fn validate(self) -> Result<Self, ParamError> {
         match self {
             ChatterRule::Accumulation { horizon } => {
-                check("chatter_horizon", horizon, horizon > 0.0, "must be finite and > 0")?;
+                check(
+                    "chatter_horizon",
+                    horizon,
+                    horizon > 0.0,
+                    "must be finite and > 0",
+                )?;
             }
             ChatterRule::FixedGap { gap } => {
                 check("chatter_gap", gap, gap > 0.0, "must be finite and > 0")?;
@@ -120,6 +125,7 @@ impl ChatterRule {
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SolverOptions {
     tol: f64,
+    order: Option<usize>,
     chatter: ChatterRule,
     max_chatter_impacts: u32,
 }
@@ -135,9 +141,28 @@ impl SolverOptions {
                 (1e-18..=1e-3).contains(&tol),
                 "must be finite and in [1e-18, 1e-3]",
             )?,
+            order: None,
             chatter: chatter.validate()?,
             max_chatter_impacts: 100_000,
         })
+    }
+
+    /// Fixes the Taylor order (`8 ≤ order ≤ 40`) instead of deriving it from the tolerance.
+    pub fn with_order(mut self, order: usize) -> Result<Self, ParamError> {
+        check(
+            "order",
+            order as f64,
+            (8..=crate::taylor::MAX_ORDER).contains(&order),
+            "must be in [8, 40]",
+        )?;
+        self.order = Some(order);
+        Ok(self)
+    }
+
+    /// Taylor order: the fixed one, or `taylor::order_for(tol)`.
+    pub fn order(&self) -> usize {
+        self.order
+            .unwrap_or_else(|| crate::taylor::order_for(self.tol))
     }
 
     /// Zeno guard: after this many consecutive impacts that each follow the previous one by less
@@ -175,6 +200,7 @@ impl Default for SolverOptions {
     fn default() -> Self {
         Self {
             tol: 1e-15,
+            order: None,
             chatter: ChatterRule::Accumulation { horizon: 1e-7 },
             max_chatter_impacts: 100_000,
         }
@@ -192,7 +218,9 @@ mod tests {
         assert_eq!(Params::new(0.0, 1.5).unwrap_err().name, "restitution");
         assert_eq!(Params::new(f64::NAN, 0.5).unwrap_err().name, "zeta");
         assert_eq!(
-            SolverOptions::new(0.0, ChatterRule::paper()).unwrap_err().name,
+            SolverOptions::new(0.0, ChatterRule::paper())
+                .unwrap_err()
+                .name,
             "tol"
         );
         assert_eq!(

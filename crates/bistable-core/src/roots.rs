@@ -26,9 +26,9 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
         *dk = ck * hk;
         hk *= h;
     }
-    // Cheap certificate: p(σ) ≥ d_0 + Σ min(d_k, 0) on [0, 1].
-    let lower: f64 = d[0] + d[1..=n].iter().map(|&v| v.min(0.0)).sum::<f64>();
-    if lower > 0.0 {
+    // Cheap certificate: on [0, 1], p(σ) ≥ min of the quadratic part + Σ_{k≥3} min(d_k, 0).
+    let tail: f64 = d[3.min(n + 1)..=n].iter().map(|&v| v.min(0.0)).sum();
+    if quadratic_min(d[0], d[1], if n >= 2 { d[2] } else { 0.0 }) + tail > 0.0 {
         return None;
     }
     let b = bernstein(&d[..=n]);
@@ -43,7 +43,10 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
             // is at a (to within the previous interval's resolution).
             return Some(polish(c, h, (a - w).max(0.0) * h, a * h));
         }
-        let changes = b.windows(2).filter(|p| (p[0] > 0.0) != (p[1] > 0.0)).count();
+        let changes = b
+            .windows(2)
+            .filter(|p| (p[0] > 0.0) != (p[1] > 0.0))
+            .count();
         if changes == 1 && b[n] <= 0.0 {
             return Some(polish(c, h, a * h, (a + w) * h));
         }
@@ -62,23 +65,32 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
     None
 }
 
-/// Bernstein coefficients of `Σ d_k σ^k` on `[0, 1]`: `b_i = Σ_{k≤i} C(i,k)/C(n,k) d_k`.
+/// Minimum of `a + bσ + cσ²` over `σ ∈ [0, 1]`.
+fn quadratic_min(a: f64, b: f64, c: f64) -> f64 {
+    let ends = a.min(a + b + c);
+    if c > 0.0 && b < 0.0 && -b < 2.0 * c {
+        ends.min(a - b * b / (4.0 * c))
+    } else {
+        ends
+    }
+}
+
+/// Bernstein coefficients of `Σ d_k σ^k` on `[0, 1]`: `b_i = Σ_{k≤i} C(i,k) d_k/C(n,k)`, by the
+/// additive triangle (pass `j` adds each coefficient's left neighbour for `i ≥ j`).
 fn bernstein(d: &[f64]) -> [f64; BUF] {
     let n = d.len() - 1;
     let mut b = [0.0; BUF];
-    // inv_cnk = 1/C(n,k), updated along k.
+    // 1/C(n,k), updated along k.
     let mut inv_cnk = 1.0;
-    for (k, &dk) in d.iter().enumerate() {
+    for (k, (bk, &dk)) in b.iter_mut().zip(d).enumerate() {
         if k > 0 {
             inv_cnk *= k as f64 / (n + 1 - k) as f64;
         }
-        // r = C(i,k)/C(n,k), from i = k upward.
-        let mut r = inv_cnk;
-        for (i, bi) in b.iter_mut().enumerate().take(n + 1).skip(k) {
-            if i > k {
-                r *= i as f64 / (i - k) as f64;
-            }
-            *bi += r * dk;
+        *bk = dk * inv_cnk;
+    }
+    for j in 1..=n {
+        for i in (j..=n).rev() {
+            b[i] += b[i - 1];
         }
     }
     b
@@ -191,12 +203,27 @@ mod tests {
     }
 
     #[test]
+    fn bernstein_matches_definition() {
+        let d = [0.3, -1.2, 0.7, 2.5, -0.4];
+        let b = bernstein(&d);
+        let binom =
+            |n: u64, k: u64| -> f64 { (1..=k).map(|j| (n + 1 - j) as f64 / j as f64).product() };
+        for i in 0..5u64 {
+            let want: f64 = (0..=i)
+                .map(|k| binom(i, k) / binom(4, k) * d[k as usize])
+                .sum();
+            assert!((b[i as usize] - want).abs() < 1e-15, "{i}");
+        }
+    }
+
+    #[test]
     fn high_degree_polynomial() {
         // A degree-20 polynomial with its first root at 0.123456789.
         let mut roots: Vec<f64> = (0..19).map(|i| 0.5 + 0.03 * f64::from(i)).collect();
         roots.push(0.123456789);
         let c = poly_from_roots(&roots, 1.0);
         let r = first_root(&c, 0.9).unwrap();
-        assert!((r - 0.123456789).abs() < 1e-15, "{r}");
+        // Ill-conditioned (Wilkinson-like): small |p'(r)| against the rounding of p.
+        assert!((r - 0.123456789).abs() < 1e-13, "{r}");
     }
 }

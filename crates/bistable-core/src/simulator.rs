@@ -15,7 +15,7 @@ use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
 use crate::roots::first_root;
 use crate::shaker::PlateMotion;
-use crate::taylor::{self, eval, eval_d, order_for, BUF};
+use crate::taylor::{self, eval, eval_d, FlightSeries, BUF};
 use crate::time::Instant;
 
 /// Why a run could not go on. The simulator stays usable at its last consistent state.
@@ -193,7 +193,7 @@ impl StepView<'_> {
 
     /// Gap `x − z` at `t0 + s`, with the plate evaluated directly (not from the step's series).
     pub fn gap_at(&self, s: f64) -> f64 {
-        let t = self.start.add(s);
+        let t = self.start + s;
         let z = self.plate.motion(t).0;
         if self.riding {
             0.0
@@ -223,8 +223,8 @@ struct Step {
     end: StepEnd,
     /// The mass rides on the plate (sticking, or the tail of a chatter sequence).
     riding: bool,
-    x: [f64; BUF],
-    u: [f64; BUF],
+    /// Series of `x` and of the gap over the step (of the plate, while riding).
+    series: FlightSeries,
 }
 
 /// The event-driven simulator (see the module documentation).
@@ -244,7 +244,9 @@ pub struct Simulator {
     pinned: usize,
     on_barrier: bool,
     well: Well,
-    step: Option<Step>,
+    /// The current step, valid while `live`.
+    step: Step,
+    live: bool,
     /// Observation time, `t0 ≤ now ≤ t0 + step.len`.
     now: Instant,
     last_impact: Option<Impact>,
@@ -286,12 +288,17 @@ impl Simulator {
         }
         let (z, zd, _) = plate.motion(start);
         let u0 = x0 - z;
-        check("x0", x0, u0 >= 0.0, "must not be below the plate (x0 >= z(t0))")?;
+        check(
+            "x0",
+            x0,
+            u0 >= 0.0,
+            "must not be below the plate (x0 >= z(t0))",
+        )?;
         Ok(Self {
             params,
             opts,
             plate,
-            order: order_for(opts.tol()),
+            order: opts.order(),
             t0: start,
             mode: ContactMode::Free,
             u0,
@@ -299,7 +306,13 @@ impl Simulator {
             pinned: usize::from(u0 == 0.0),
             on_barrier: x0 == BARRIER,
             well: Well::of(x0),
-            step: None,
+            step: Step {
+                len: 0.0,
+                end: StepEnd::Plain,
+                riding: false,
+                series: FlightSeries::default(),
+            },
+            live: false,
             now: start,
             last_impact: None,
             last_impact_t: None,
@@ -352,20 +365,18 @@ impl Simulator {
     pub fn state(&self) -> State {
         let s = self.now.since(self.t0);
         let (z, zdot, _) = self.plate.motion(self.now);
-        let riding = match &self.step {
-            Some(step) => step.riding,
-            None => self.mode == ContactMode::Sticking,
+        let riding = if self.live {
+            self.step.riding
+        } else {
+            self.mode == ContactMode::Sticking
         };
         let (x, v, mode) = if riding {
             (z, zdot, ContactMode::Sticking)
+        } else if self.live && s > 0.0 {
+            let (x, v) = eval_d(&self.step.series.x[..=self.order], s);
+            (x, v, ContactMode::Free)
         } else {
-            match &self.step {
-                Some(step) if s > 0.0 => {
-                    let (x, v) = eval_d(&step.x[..=self.order], s);
-                    (x, v, ContactMode::Free)
-                }
-                _ => (self.u0 + z, self.w0 + zdot, ContactMode::Free),
-            }
+            (self.u0 + z, self.w0 + zdot, ContactMode::Free)
         };
         State {
             t: self.now.to_f64(),
@@ -405,25 +416,25 @@ impl Simulator {
         }
         let mut empty_steps = 0u32;
         loop {
-            if self.step.is_none() {
-                let step = self.compute_step()?;
+            if !self.live {
+                self.compute_step()?;
+                self.live = true;
                 self.stats.steps += 1;
                 obs.step(&StepView {
                     start: self.t0,
-                    len: step.len,
-                    riding: step.riding,
-                    x: &step.x[..=self.order],
+                    len: self.step.len,
+                    riding: self.step.riding,
+                    x: &self.step.series.x[..=self.order],
                     plate: &self.plate,
                 });
-                self.step = Some(step);
             }
-            let (len, end) = self.step.as_ref().map_or((0.0, StepEnd::Plain), |s| (s.len, s.end));
+            let (len, end) = (self.step.len, self.step.end);
             if len == 0.0 && end == StepEnd::Plain {
                 // Only at the end of an external plate piece.
                 self.now = target;
                 return Ok(true);
             }
-            let step_end = self.t0.add(len);
+            let step_end = self.t0 + len;
             if step_end > target {
                 self.now = target;
                 return Ok(true);
@@ -476,7 +487,7 @@ impl Simulator {
             self.pinned = 0;
         }
         self.on_barrier = false;
-        self.step = None;
+        self.live = false;
         Ok(())
     }
 
@@ -487,7 +498,8 @@ impl Simulator {
         Ok(out)
     }
 
-    fn compute_step(&self) -> Result<Step, SimError> {
+    /// Computes the step from `t0` into `self.step`: its series, length and end event.
+    fn compute_step(&mut self) -> Result<(), SimError> {
         let p = self.order;
         let mut z = [0.0; BUF];
         self.plate.series(self.t0, &mut z[..p + 3]);
@@ -495,125 +507,96 @@ impl Simulator {
             .plate
             .horizon()
             .map_or(f64::INFINITY, |h| h.since(self.t0).max(0.0));
-        let nonfinite = SimError::NonFinite { t: self.t0.to_f64() };
+        let nonfinite = SimError::NonFinite {
+            t: self.t0.to_f64(),
+        };
+        let tol = self.opts.tol();
+        let zeta = self.params.zeta();
+        let step = &mut self.step;
+        step.len = 0.0;
         match self.mode {
             ContactMode::Free => {
-                let s = taylor::flight(self.params.zeta(), self.u0, self.w0, &z, p);
+                step.riding = false;
+                let s = &mut step.series;
+                taylor::flight(zeta, self.u0, self.w0, &z, p, s);
                 if !s.x[..=p].iter().all(|c| c.is_finite()) {
                     return Err(nonfinite);
                 }
                 let mut gap = s.u;
                 gap[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
                 let gap = &gap[..=p];
-                let m = gap.iter().position(|&c| c != 0.0);
-                let instant = |end| Step {
-                    len: 0.0,
-                    end,
-                    riding: false,
-                    x: s.x,
-                    u: s.u,
-                };
-                match m {
+                let Some(m) = gap.iter().position(|&c| c != 0.0) else {
                     // The mass rests exactly on a plate that exerts no force: stuck.
-                    None => return Ok(instant(StepEnd::Stick(StickCause::Plastic))),
-                    Some(0) if gap[0] < 0.0 => return Err(nonfinite),
-                    Some(1) if gap[1] < 0.0 => return Ok(instant(StepEnd::Impact)),
-                    Some(_) if gap[m.unwrap_or(0)] < 0.0 => {
-                        return Ok(instant(StepEnd::Stick(StickCause::Plastic)))
-                    }
-                    _ => {}
+                    step.end = StepEnd::Stick(StickCause::Plastic);
+                    return Ok(());
+                };
+                if gap[m] < 0.0 {
+                    step.end = match m {
+                        0 => return Err(nonfinite),
+                        // Approaching the plate while touching it: impact now.
+                        1 => StepEnd::Impact,
+                        // Touching with no relative velocity and pushed: stuck.
+                        _ => StepEnd::Stick(StickCause::Plastic),
+                    };
+                    return Ok(());
                 }
-                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, self.opts.tol()).min(room);
-                if !(h >= 0.0) {
+                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol).min(room);
+                if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
-                let mut len = h;
-                let mut end = StepEnd::Plain;
-                if let Some(r) = first_root(&gap[m.unwrap_or(0)..], h) {
-                    len = r;
-                    end = StepEnd::Impact;
+                step.len = h;
+                step.end = StepEnd::Plain;
+                if let Some(r) = first_root(&gap[m..], h) {
+                    step.len = r;
+                    step.end = StepEnd::Impact;
                 }
-                if let Some(r) = self.barrier_root(&s.x[..=p], len) {
-                    len = r;
-                    end = StepEnd::Barrier;
+                if let Some(r) = barrier_root(self.well, self.on_barrier, &s.x[..=p], step.len) {
+                    step.len = r;
+                    step.end = StepEnd::Barrier;
                 }
-                Ok(Step {
-                    len,
-                    end,
-                    riding: false,
-                    x: s.x,
-                    u: s.u,
-                })
             }
             ContactMode::Sticking => {
-                let mut n = taylor::contact_force(self.params.zeta(), &z, p);
+                step.riding = true;
+                let mut n = taylor::contact_force(zeta, &z, p);
                 if !n[..=p].iter().all(|c| c.is_finite()) {
                     return Err(nonfinite);
                 }
                 n[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
                 let n = &n[..=p];
+                step.series.x = z;
                 let m = n.iter().position(|&c| c != 0.0);
-                let mut step = Step {
-                    len: 0.0,
-                    end: StepEnd::Release,
-                    riding: true,
-                    x: z,
-                    u: [0.0; BUF],
-                };
-                if let Some(m) = m {
-                    if n[m] < 0.0 {
-                        return Ok(step);
-                    }
+                if m.is_some_and(|m| n[m] < 0.0) {
+                    step.end = StepEnd::Release;
+                    return Ok(());
                 }
-                let h = taylor::step_size(&[&z[..=p], n], p, self.opts.tol()).min(room);
-                if !(h >= 0.0) {
+                let h = taylor::step_size(&[&z[..=p], n], p, tol).min(room);
+                if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
                 step.len = h;
                 step.end = StepEnd::Plain;
-                if let Some(m) = m {
-                    if let Some(r) = first_root(&n[m..], h) {
-                        step.len = r;
-                        step.end = StepEnd::Release;
-                    }
+                if let Some(r) = m.and_then(|m| first_root(&n[m..], h)) {
+                    step.len = r;
+                    step.end = StepEnd::Release;
                 }
-                if let Some(r) = self.barrier_root(&z[..=p], step.len) {
+                if let Some(r) = barrier_root(self.well, self.on_barrier, &z[..=p], step.len) {
                     step.len = r;
                     step.end = StepEnd::Barrier;
                 }
-                Ok(step)
             }
         }
-    }
-
-    /// First crossing of `x = ½` out of the current well within `(0, h]`.
-    fn barrier_root(&self, x: &[f64], h: f64) -> Option<f64> {
-        let sign = if self.well == Well::Two { 1.0 } else { -1.0 };
-        let mut g = [0.0; BUF];
-        for (gk, &xk) in g.iter_mut().zip(x) {
-            *gk = sign * xk;
-        }
-        g[0] = if self.on_barrier {
-            0.0
-        } else {
-            sign * (x[0] - BARRIER)
-        };
-        let g = &g[..x.len()];
-        let m = g.iter().position(|&c| c != 0.0)?;
-        if g[m] < 0.0 {
-            // Leaving the barrier back into the other well right away.
-            return Some(0.0);
-        }
-        first_root(&g[m..], h)
+        Ok(())
     }
 
     /// Completes the current step: moves to its end and applies what happens there.
     fn finish_step(&mut self, obs: &mut impl Observer) -> Result<ControlFlow<()>, SimError> {
-        let Some(step) = self.step.take() else {
+        if !self.live {
             return Ok(ControlFlow::Continue(()));
-        };
+        }
+        self.live = false;
+        let step = &self.step;
         let p = self.order;
-        let t1 = self.t0.add(step.len);
+        let t1 = self.t0 + step.len;
         self.t0 = t1;
         self.on_barrier = false;
         if step.riding {
@@ -640,8 +623,9 @@ impl Simulator {
         let (u1, w1) = if step.len == 0.0 {
             (self.u0, self.w0)
         } else {
-            eval_d(&step.u[..=p], step.len)
+            eval_d(&step.series.u[..=p], step.len)
         };
+        let end = step.end;
         if !(u1.is_finite() && w1.is_finite()) {
             return Err(SimError::NonFinite { t: t1.to_f64() });
         }
@@ -649,7 +633,7 @@ impl Simulator {
         self.u0 = u1.max(0.0);
         self.w0 = w1;
         self.pinned = usize::from(self.u0 == 0.0);
-        Ok(match step.end {
+        Ok(match end {
             StepEnd::Plain => ControlFlow::Continue(()),
             StepEnd::Barrier => self.cross_barrier(t1, obs),
             StepEnd::Impact => return self.impact(t1, w1.min(0.0), obs),
@@ -757,12 +741,31 @@ impl Simulator {
             chatter::Decision::Fly | chatter::Decision::Zeno => return,
             chatter::Decision::StickAfter(len, cause) => (len, cause),
         };
-        self.step = Some(Step {
-            len,
-            end: StepEnd::Stick(cause),
-            riding: true,
-            x: [0.0; BUF],
-            u: [0.0; BUF],
-        });
+        self.step.len = len;
+        self.step.end = StepEnd::Stick(cause);
+        self.step.riding = true;
+        self.live = true;
     }
+}
+
+/// First crossing of `x = ½` out of `well` within `(0, h]`, for the series `x` of the position
+/// (`on_barrier`: the step starts on the barrier, so that root is divided out).
+fn barrier_root(well: Well, on_barrier: bool, x: &[f64], h: f64) -> Option<f64> {
+    let sign = if well == Well::Two { 1.0 } else { -1.0 };
+    let mut g = [0.0; BUF];
+    for (gk, &xk) in g.iter_mut().zip(x) {
+        *gk = sign * xk;
+    }
+    g[0] = if on_barrier {
+        0.0
+    } else {
+        sign * (x[0] - BARRIER)
+    };
+    let g = &g[..x.len()];
+    let m = g.iter().position(|&c| c != 0.0)?;
+    if g[m] < 0.0 {
+        // Leaving the barrier back into the other well right away.
+        return Some(0.0);
+    }
+    first_root(&g[m..], h)
 }

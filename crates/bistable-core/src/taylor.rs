@@ -22,57 +22,95 @@ pub(crate) struct FlightSeries {
     pub u: [f64; BUF],
 }
 
+impl Default for FlightSeries {
+    fn default() -> Self {
+        Self {
+            x: [0.0; BUF],
+            u: [0.0; BUF],
+        }
+    }
+}
+
 /// Free flight `x'' = −2ζx' − U'(x)` from gap `u0`, gap velocity `w0` and plate coefficients `z`
-/// (at least `order + 2` of them). Fills coefficients `0..=order + 1`.
-pub(crate) fn flight(zeta: f64, u0: f64, w0: f64, z: &[f64; BUF], order: usize) -> FlightSeries {
-    let mut x = [0.0; BUF];
-    let mut u = [0.0; BUF];
-    let mut sq = [0.0; BUF];
+/// (at least `order + 2` of them). Fills coefficients `0..=order + 1` of `out`.
+pub(crate) fn flight(
+    zeta: f64,
+    u0: f64,
+    w0: f64,
+    z: &[f64; BUF],
+    order: usize,
+    out: &mut FlightSeries,
+) {
+    let FlightSeries { x, u } = out;
+    // x in reverse order (xr[R − j] = x_j) and zero beyond x_0, so that each Cauchy product is a
+    // dot product over a length rounded up to a multiple of 4.
+    let mut xr = [0.0; PAD];
+    let mut sq = [0.0; PAD];
     x[0] = u0 + z[0];
     x[1] = w0 + z[1];
     u[0] = u0;
     u[1] = w0;
+    xr[R] = x[0];
+    xr[R - 1] = x[1];
+    let mut xp = [0.0; PAD];
+    xp[0] = x[0];
+    xp[1] = x[1];
     for k in 0..order {
-        let s = cauchy(&x, &x, k);
+        let len = (k + 4) & !3;
+        let rev = &xr[R - k..R - k + len];
+        let s = dot4(&xp[..len], rev);
         sq[k] = s;
-        let c = cauchy(&sq, &x, k);
-        let rhs = -2.0 * zeta * (k + 1) as f64 * x[k + 1] - x[k] + 3.0 * s - 2.0 * c;
+        let c = dot4(&sq[..len], rev);
+        let rhs = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k] + 3.0 * s - 2.0 * c;
         let xk2 = rhs / ((k + 1) * (k + 2)) as f64;
-        x[k + 2] = xk2;
+        xp[k + 2] = xk2;
+        xr[R - k - 2] = xk2;
         u[k + 2] = xk2 - z[k + 2];
     }
-    FlightSeries { x, u }
+    x.copy_from_slice(&xp[..BUF]);
+}
+
+/// Padded buffer length for the products (room for a dot product of length `BUF` rounded up).
+const PAD: usize = BUF + 8;
+/// Index of `x_0` in the reversed buffer.
+const R: usize = BUF + 2;
+
+/// `Σ a_j b_j` over slices whose length is a multiple of 4, with four accumulators.
+#[inline]
+fn dot4(a: &[f64], b: &[f64]) -> f64 {
+    let (a, _) = a.as_chunks::<4>();
+    let (b, _) = b.as_chunks::<4>();
+    let mut acc = [0.0; 4];
+    for (x, y) in a.iter().zip(b) {
+        for i in 0..4 {
+            acc[i] += x[i] * y[i];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 /// Contact force `N = z̈ + 2ζż + U'(z)` (Eq. 9) as a series, coefficients `0..=order`, from plate
 /// coefficients `0..=order + 2`.
 pub(crate) fn contact_force(zeta: f64, z: &[f64; BUF], order: usize) -> [f64; BUF] {
+    let mut zp = [0.0; PAD];
+    let mut zr = [0.0; PAD];
+    for (j, &zj) in z.iter().enumerate().take(order + 1) {
+        zp[j] = zj;
+        zr[R - j] = zj;
+    }
     let mut n = [0.0; BUF];
-    let mut sq = [0.0; BUF];
+    let mut sq = [0.0; PAD];
     for k in 0..=order {
-        sq[k] = cauchy(z, z, k);
-        let c = cauchy(&sq, z, k);
-        n[k] = ((k + 1) * (k + 2)) as f64 * z[k + 2] + 2.0 * zeta * (k + 1) as f64 * z[k + 1] + z[k]
-            - 3.0 * sq[k]
-            + 2.0 * c;
+        let len = (k + 4) & !3;
+        let rev = &zr[R - k..R - k + len];
+        sq[k] = dot4(&zp[..len], rev);
+        let c = dot4(&sq[..len], rev);
+        n[k] =
+            ((k + 1) * (k + 2)) as f64 * z[k + 2] + 2.0 * zeta * (k + 1) as f64 * z[k + 1] + z[k]
+                - 3.0 * sq[k]
+                + 2.0 * c;
     }
     n
-}
-
-/// `Σ_{j=0}^{k} a_j b_{k−j}`, with two accumulators to shorten the dependency chain.
-#[inline]
-fn cauchy(a: &[f64; BUF], b: &[f64; BUF], k: usize) -> f64 {
-    let (mut s0, mut s1) = (0.0, 0.0);
-    let mut j = 0;
-    while j + 1 <= k {
-        s0 = a[j].mul_add(b[k - j], s0);
-        s1 = a[j + 1].mul_add(b[k - j - 1], s1);
-        j += 2;
-    }
-    if j == k {
-        s0 = a[j].mul_add(b[0], s0);
-    }
-    s0 + s1
 }
 
 /// Jorba–Zou step size from the last two coefficients of the given series (each a slice of
@@ -84,7 +122,10 @@ pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64) -> f64 {
         .fold(1.0_f64, f64::max);
     let eps = tol * scale;
     let last = series.iter().map(|c| c[order].abs()).fold(0.0, f64::max);
-    let prev = series.iter().map(|c| c[order - 1].abs()).fold(0.0, f64::max);
+    let prev = series
+        .iter()
+        .map(|c| c[order - 1].abs())
+        .fold(0.0, f64::max);
     let r1 = (eps / prev).powf(1.0 / (order - 1) as f64);
     let r2 = (eps / last).powf(1.0 / order as f64);
     let safety = (-0.7 / (order - 1) as f64).exp();
@@ -97,7 +138,7 @@ pub(crate) const MAX_STEP: f64 = 8.0;
 /// `Σ c_k s^k` (Horner).
 #[inline]
 pub(crate) fn eval(c: &[f64], s: f64) -> f64 {
-    c.iter().rev().fold(0.0, |acc, &ck| acc.mul_add(s, ck))
+    c.iter().rev().fold(0.0, |acc, &ck| acc * s + ck)
 }
 
 /// Value and derivative of `Σ c_k s^k`.
@@ -106,8 +147,8 @@ pub(crate) fn eval_d(c: &[f64], s: f64) -> (f64, f64) {
     let mut p = 0.0_f64;
     let mut d = 0.0_f64;
     for &ck in c.iter().rev() {
-        d = d.mul_add(s, p);
-        p = p.mul_add(s, ck);
+        d = d * s + p;
+        p = p * s + ck;
     }
     (p, d)
 }
@@ -124,7 +165,8 @@ mod tests {
         let (zeta, a) = (0.1, 1e-8);
         let z = [0.0; BUF];
         let order = 20;
-        let s = flight(zeta, a, 0.0, &z, order);
+        let mut s = FlightSeries::default();
+        flight(zeta, a, 0.0, &z, order, &mut s);
         let wd = (1.0 - zeta * zeta).sqrt();
         let h = 0.3;
         let exact = a * (-zeta * h).exp() * ((wd * h).cos() + zeta / wd * (wd * h).sin());
@@ -136,7 +178,8 @@ mod tests {
     fn energy_is_conserved_along_a_series_without_damping() {
         let z = [0.0; BUF];
         let order = 24;
-        let s = flight(0.0, 0.3, 0.2, &z, order);
+        let mut s = FlightSeries::default();
+        flight(0.0, 0.3, 0.2, &z, order, &mut s);
         let h = step_size(&[&s.x[..=order]], order, 1e-16);
         let e0 = 0.5 * 0.2 * 0.2 + crate::potential::energy(0.3);
         let (x, v) = eval_d(&s.x[..=order], h);

@@ -21,11 +21,22 @@ pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
     (s, err)
 }
 
-/// Error-free product: `a * b = p + err` exactly.
+/// Error-free product: `a * b = p + err` exactly (Dekker; no FMA needed, valid while the
+/// operands are below `2^996` in magnitude).
 #[inline]
 pub(crate) fn two_prod(a: f64, b: f64) -> (f64, f64) {
     let p = a * b;
-    (p, a.mul_add(b, -p))
+    let (ah, al) = split(a);
+    let (bh, bl) = split(b);
+    (p, ((ah * bh - p) + ah * bl + al * bh) + al * bl)
+}
+
+/// Veltkamp split of `a` into two halves of 26 significant bits each.
+#[inline]
+fn split(a: f64) -> (f64, f64) {
+    let c = 134_217_729.0 * a;
+    let hi = c - (c - a);
+    (hi, a - hi)
 }
 
 impl Instant {
@@ -42,14 +53,6 @@ impl Instant {
     /// Both parts, `(hi, lo)`.
     pub fn parts(self) -> (f64, f64) {
         (self.hi, self.lo)
-    }
-
-    /// `self + dt`, with the rounding error carried into the low part.
-    #[must_use]
-    pub fn add(self, dt: f64) -> Self {
-        let (s, e) = two_sum(self.hi, dt);
-        let (hi, lo) = two_sum(s, e + self.lo);
-        Self { hi, lo }
     }
 
     /// `self − earlier` as a double (accurate to one rounding).
@@ -86,10 +89,27 @@ impl Instant {
 
 /// `2π` as an unevaluated sum of three doubles.
 const TWO_PI: (f64, f64, f64) = (
-    6.283185307179586,
+    std::f64::consts::TAU,
     2.4492935982947064e-16,
     -5.989539619436679e-33,
 );
+
+impl std::ops::Add<f64> for Instant {
+    type Output = Instant;
+
+    /// `self + dt`, with the rounding error carried into the low part.
+    fn add(self, dt: f64) -> Self {
+        let (s, e) = two_sum(self.hi, dt);
+        let (hi, lo) = two_sum(s, e + self.lo);
+        Self { hi, lo }
+    }
+}
+
+impl PartialOrd for Instant {
+    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
+        self.since(*other).partial_cmp(&0.0)
+    }
+}
 
 #[cfg(test)]
 mod tests {
@@ -101,7 +121,7 @@ mod tests {
         let mut t = Instant::new(0.0);
         let mut naive = 0.0_f64;
         for _ in 0..1_000_000 {
-            t = t.add(0.1);
+            t = t + 0.1;
             naive += 0.1;
         }
         let (hi, lo) = t.parts();
@@ -109,6 +129,14 @@ mod tests {
         assert!((lo - 5.551115123125783e-12).abs() < 1e-24, "{lo}");
         // The plain sum is off by many ulps; the two-part sum is not.
         assert!((naive - 100_000.0).abs() > 1e-7);
+    }
+
+    #[test]
+    fn two_prod_is_exact() {
+        let (a, b) = (0.1_f64, 1.75 * 123_456.789);
+        let (p, e) = two_prod(a, b);
+        assert_eq!(e, a.mul_add(b, -p));
+        assert!(e != 0.0);
     }
 
     #[test]
@@ -122,11 +150,5 @@ mod tests {
         // Offset and sign handling.
         let b = Instant::new(1.0).angle(Instant::new(0.0), 1.0, 3.0);
         assert!((b - (4.0 - 2.0 * std::f64::consts::PI)).abs() < 1e-15);
-    }
-}
-
-impl PartialOrd for Instant {
-    fn partial_cmp(&self, other: &Self) -> Option<std::cmp::Ordering> {
-        self.since(*other).partial_cmp(&0.0)
     }
 }
