@@ -196,10 +196,11 @@ impl SolverOptions {
 }
 
 impl Default for SolverOptions {
-    /// `tol = 1e-15` and the accumulation rule with a `1e-7` horizon.
+    /// `tol = 1e-16` (order 21: truncation error at the level of rounding, so energy drifts by
+    /// < 1e-12 over 10⁴ undamped natural periods) and the accumulation rule with a `1e-7` horizon.
     fn default() -> Self {
         Self {
-            tol: 1e-15,
+            tol: 1e-16,
             order: None,
             chatter: ChatterRule::Accumulation { horizon: 1e-7 },
             max_chatter_impacts: 100_000,
