@@ -115,37 +115,63 @@ fn split(b: &[f64]) -> ([f64; BUF], [f64; BUF]) {
     (left, right)
 }
 
-/// Shrinks a bracket `[lo, hi]` (in `s`) with `p(lo) > 0 ≥ p(hi)` to adjacent doubles by
-/// Newton steps kept inside the bracket, bisecting when Newton does not halve it; returns `lo`.
+/// Locates the crossing in a bracket `[lo, hi]` (in `s`) with `p(lo) > 0 ≥ p(hi)`: safeguarded
+/// Newton (bisection when Newton leaves the bracket) until the update is below two ulps, then a
+/// short walk over neighbouring doubles to the last one where `p > 0` (bisection to adjacent
+/// doubles where `p` is too flat for the walk). Returns that double.
 fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64) -> f64 {
     if eval(c, lo) <= 0.0 {
         return lo.max(f64::MIN_POSITIVE);
     }
     hi = hi.min(h);
     let mut x = 0.5 * (lo + hi);
-    for _ in 0..200 {
+    for _ in 0..100 {
         let (p, dp) = eval_d(c, x);
         if p > 0.0 {
             lo = x;
         } else {
             hi = x;
         }
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
+        let mut next = x - p / dp;
+        if !(next > lo && next < hi) {
+            next = 0.5 * (lo + hi);
+        }
+        let done = (next - x).abs() <= 2.0 * f64::EPSILON * x.abs();
+        x = next;
+        if done {
             break;
         }
-        let newton = x - p / dp;
-        let width = hi - lo;
-        x = if newton > lo && newton < hi && (newton - x).abs() < 0.5 * width {
-            newton
+    }
+    // Walk from the last iterate to the sign change between adjacent doubles.
+    let positive = |v: f64| eval(c, v) > 0.0;
+    let mut y = x;
+    for _ in 0..16 {
+        if positive(y) {
+            let up = y.next_up();
+            if up >= hi || !positive(up) {
+                return y;
+            }
+            y = up;
         } else {
-            mid
-        };
-        if x <= lo || x >= hi {
-            x = mid;
+            hi = hi.min(y);
+            y = y.next_down();
+            if y <= lo {
+                return lo;
+            }
         }
     }
-    lo
+    // p is flat here: bisect the bracket down to adjacent doubles.
+    loop {
+        let mid = 0.5 * (lo + hi);
+        if mid <= lo || mid >= hi {
+            return lo;
+        }
+        if positive(mid) {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
 }
 
 #[cfg(test)]

@@ -194,6 +194,26 @@ impl PlateMotion {
         }
     }
 
+    /// A sinusoid with frequency `omega` and velocity amplitude `velocity` that takes over from
+    /// this motion at `at` without a jump in plate position: it keeps the current shaker phase
+    /// (phase 0 after an external piece) and absorbs any position difference into its mean
+    /// position. Velocity may jump (a new set-point is a new velocity amplitude).
+    pub fn continued_by_sinusoid(
+        &self,
+        at: Instant,
+        omega: f64,
+        velocity: f64,
+    ) -> Result<Sinusoid, ParamError> {
+        let fresh = Sinusoid::new(omega, velocity)?;
+        let phase = match self {
+            PlateMotion::Sinusoid(s) => s.angle(at),
+            PlateMotion::Poly(_) => 0.0,
+        };
+        let z_now = self.motion(at).0;
+        let offset = z_now - velocity / omega * phase.sin();
+        fresh.with_origin(at, phase, offset)
+    }
+
     /// Position, velocity and acceleration `(z, ż, z̈)` at `t`.
     pub fn motion(&self, t: Instant) -> (f64, f64, f64) {
         let mut c = [0.0; 3];
@@ -261,6 +281,21 @@ mod tests {
             let d = (ph - expected).abs();
             assert!(d.min(1.0 - d) < 1e-13, "Ω={omega}: {ph} vs {expected}");
         }
+    }
+
+    #[test]
+    fn continuation_keeps_position_and_phase() {
+        let old = PlateMotion::from(Sinusoid::new(1.75, 0.07).unwrap());
+        let at = Instant::new(12.345);
+        let new = PlateMotion::from(old.continued_by_sinusoid(at, 2.5, 0.1).unwrap());
+        assert!((new.motion(at).0 - old.motion(at).0).abs() < 1e-16);
+        assert!((new.phase_cycles(at).unwrap() - old.phase_cycles(at).unwrap()).abs() < 1e-15);
+        // After the switch it is a sinusoid of the new frequency and amplitude.
+        let (z1, zd1, _) = new.motion(at + 0.3);
+        let th = new.phase_cycles(at + 0.3).unwrap() * std::f64::consts::TAU;
+        assert!((zd1 - 0.1 * th.cos()).abs() < 1e-15);
+        assert!((z1 - new.motion(at).0 - 0.1 / 2.5 * (th.sin() - (th - 0.75).sin())).abs() < 1e-15);
+        assert!(old.continued_by_sinusoid(at, -1.0, 0.1).is_err());
     }
 
     #[test]

@@ -491,6 +491,16 @@ impl Simulator {
         Ok(())
     }
 
+    /// Switches to a sinusoidal shaker with frequency `omega` and velocity amplitude `velocity`
+    /// at the current time, continuing the plate position and phase (see
+    /// [`PlateMotion::continued_by_sinusoid`]).
+    pub fn set_sinusoid(&mut self, omega: f64, velocity: f64) -> Result<(), SimError> {
+        let s = self
+            .plate
+            .continued_by_sinusoid(self.now, omega, velocity)?;
+        self.set_plate(s.into())
+    }
+
     /// Advances to `t` and returns the events on the way.
     pub fn events_until(&mut self, t: f64) -> Result<Vec<Event>, SimError> {
         let mut out = Vec::new();

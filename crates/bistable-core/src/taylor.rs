@@ -59,16 +59,30 @@ pub(crate) fn flight(
         let len = (k + 4) & !3;
         let rev = &xr[R - k..R - k + len];
         let s = dot4(&xp[..len], rev);
+        // sq[k] is still zero here: its term s·x_0 is added apart, so that the vector loads
+        // never wait for the store of a value computed just before.
+        let c = dot4(&sq[..len], rev) + s * xp[0];
         sq[k] = s;
-        let c = dot4(&sq[..len], rev);
         let rhs = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k] + 3.0 * s - 2.0 * c;
-        let xk2 = rhs / ((k + 1) * (k + 2)) as f64;
+        let xk2 = rhs * INV_PAIR[k];
         xp[k + 2] = xk2;
         xr[R - k - 2] = xk2;
         u[k + 2] = xk2 - z[k + 2];
     }
     x.copy_from_slice(&xp[..BUF]);
 }
+
+/// `1/((k+1)(k+2))`: the recurrence multiplies instead of dividing (a division per order would
+/// sit on the critical path).
+const INV_PAIR: [f64; BUF] = {
+    let mut t = [0.0; BUF];
+    let mut k = 0;
+    while k < BUF {
+        t[k] = 1.0 / ((k + 1) * (k + 2)) as f64;
+        k += 1;
+    }
+    t
+};
 
 /// Padded buffer length for the products (room for a dot product of length `BUF` rounded up).
 const PAD: usize = BUF + 8;
