@@ -41,14 +41,14 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
         if b[0] <= 0.0 {
             // p(a) ≤ 0 at the left end: the previous interval ended positive, so the crossing
             // is at a (to within the previous interval's resolution).
-            return Some(polish(c, h, (a - w).max(0.0) * h, a * h));
+            return Some(polish(c, h, (a - w).max(0.0) * h, a * h, None));
         }
         let changes = b
             .windows(2)
             .filter(|p| (p[0] > 0.0) != (p[1] > 0.0))
             .count();
         if changes == 1 && b[n] <= 0.0 {
-            return Some(polish(c, h, a * h, (a + w) * h));
+            return Some(polish(c, h, a * h, (a + w) * h, Some((b[0], b[n]))));
         }
         if w <= MIN_WIDTH {
             // A minimum within rounding of zero: a grazing contact.
@@ -89,8 +89,12 @@ fn bernstein(d: &[f64]) -> [f64; BUF] {
         *bk = dk * inv_cnk;
     }
     for j in 1..=n {
-        for i in (j..=n).rev() {
-            b[i] += b[i - 1];
+        // Ascending with the old left neighbour carried in a register (no chain through memory).
+        let mut left = b[j - 1];
+        for bi in &mut b[j..=n] {
+            let old = *bi;
+            *bi = old + left;
+            left = old;
         }
     }
     b
@@ -115,38 +119,51 @@ fn split(b: &[f64]) -> ([f64; BUF], [f64; BUF]) {
     (left, right)
 }
 
-/// Locates the crossing in a bracket `[lo, hi]` (in `s`) with `p(lo) > 0 ≥ p(hi)`: safeguarded
+/// Locates the crossing in a bracket `[lo, hi]` (in `s`) with `p(lo) > 0 ≥ p(hi)` (`ends`: these
+/// two values, when the caller knows them): safeguarded
 /// Newton (bisection when Newton leaves the bracket) until the update is below two ulps, then a
 /// short walk over neighbouring doubles to the last one where `p > 0` (bisection to adjacent
 /// doubles where `p` is too flat for the walk). Returns that double.
-fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64) -> f64 {
-    if eval(c, lo) <= 0.0 {
+fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64, ends: Option<(f64, f64)>) -> f64 {
+    hi = hi.min(h);
+    // Values at the ends: the Bernstein end coefficients when known, else evaluated.
+    let (plo, phi) = ends.unwrap_or_else(|| (eval(c, lo), eval(c, hi)));
+    if plo <= 0.0 {
         return lo.max(f64::MIN_POSITIVE);
     }
-    hi = hi.min(h);
-    let mut x = 0.5 * (lo + hi);
+    // Start from the secant through the bracket ends.
+    let mut x = if phi < 0.0 {
+        lo + (hi - lo) * (plo / (plo - phi))
+    } else {
+        0.5 * (lo + hi)
+    };
     for _ in 0..100 {
-        let (p, dp) = eval_d(c, x);
+        let (p, dp, size) = eval_d_size(c, x);
         if p > 0.0 {
             lo = x;
         } else {
             hi = x;
         }
+        // At the rounding level of p, Newton updates are noise: stop.
+        if p.abs() <= 8.0 * f64::EPSILON * size {
+            break;
+        }
         let mut next = x - p / dp;
         if !(next > lo && next < hi) {
             next = 0.5 * (lo + hi);
         }
-        let done = (next - x).abs() <= 2.0 * f64::EPSILON * x.abs();
-        x = next;
-        if done {
+        if (next - x).abs() <= 2.0 * f64::EPSILON * x.abs() {
             break;
         }
+        x = next;
     }
-    // Walk from the last iterate to the sign change between adjacent doubles.
+    // Walk from the last iterate to the sign change between adjacent doubles; the sign at x
+    // is known from the loop (x is lo or hi).
     let positive = |v: f64| eval(c, v) > 0.0;
     let mut y = x;
+    let mut y_positive = x == lo;
     for _ in 0..16 {
-        if positive(y) {
+        if y_positive {
             let up = y.next_up();
             if up >= hi || !positive(up) {
                 return y;
@@ -158,6 +175,7 @@ fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64) -> f64 {
             if y <= lo {
                 return lo;
             }
+            y_positive = positive(y);
         }
     }
     // p is flat here: bisect the bracket down to adjacent doubles.
@@ -172,6 +190,18 @@ fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64) -> f64 {
             hi = mid;
         }
     }
+}
+
+/// Value, derivative and `Σ |c_k| s^k` (the scale of the rounding error of the value) at `s ≥ 0`.
+#[inline]
+fn eval_d_size(c: &[f64], s: f64) -> (f64, f64, f64) {
+    let (mut p, mut d, mut m) = (0.0_f64, 0.0_f64, 0.0_f64);
+    for &ck in c.iter().rev() {
+        d = d * s + p;
+        p = p * s + ck;
+        m = m * s + ck.abs();
+    }
+    (p, d, m)
 }
 
 #[cfg(test)]

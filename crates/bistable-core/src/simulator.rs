@@ -373,7 +373,7 @@ impl Simulator {
         let (x, v, mode) = if riding {
             (z, zdot, ContactMode::Sticking)
         } else if self.live && s > 0.0 {
-            let (x, v) = eval_d(&self.step.series.x[..=self.order], s);
+            let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
             (x, v, ContactMode::Free)
         } else {
             (self.u0 + z, self.w0 + zdot, ContactMode::Free)
@@ -424,7 +424,7 @@ impl Simulator {
                     start: self.t0,
                     len: self.step.len,
                     riding: self.step.riding,
-                    x: &self.step.series.x[..=self.order],
+                    x: &self.step.series.x[..=self.order + 1],
                     plate: &self.plate,
                 });
             }
@@ -529,12 +529,12 @@ impl Simulator {
                 step.riding = false;
                 let s = &mut step.series;
                 taylor::flight(zeta, self.u0, self.w0, &z, p, s);
-                if !s.x[..=p].iter().all(|c| c.is_finite()) {
+                if !s.x[..=p + 1].iter().all(|c| c.is_finite()) {
                     return Err(nonfinite);
                 }
                 let mut gap = s.u;
                 gap[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
-                let gap = &gap[..=p];
+                let gap = &gap[..=p + 1];
                 let Some(m) = gap.iter().position(|&c| c != 0.0) else {
                     // The mass rests exactly on a plate that exerts no force: stuck.
                     step.end = StepEnd::Stick(StickCause::Plastic);
@@ -560,7 +560,8 @@ impl Simulator {
                     step.len = r;
                     step.end = StepEnd::Impact;
                 }
-                if let Some(r) = barrier_root(self.well, self.on_barrier, &s.x[..=p], step.len) {
+                if let Some(r) = barrier_root(self.well, self.on_barrier, &s.x[..=p + 1], step.len)
+                {
                     step.len = r;
                     step.end = StepEnd::Barrier;
                 }
@@ -633,7 +634,7 @@ impl Simulator {
         let (u1, w1) = if step.len == 0.0 {
             (self.u0, self.w0)
         } else {
-            eval_d(&step.series.u[..=p], step.len)
+            eval_d(&step.series.u[..=p + 1], step.len)
         };
         let end = step.end;
         if !(u1.is_finite() && w1.is_finite()) {

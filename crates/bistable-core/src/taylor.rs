@@ -55,15 +55,19 @@ pub(crate) fn flight(
     let mut xp = [0.0; PAD];
     xp[0] = x[0];
     xp[1] = x[1];
+    let three_minus_2x0 = 3.0 - 2.0 * x[0];
     for k in 0..order {
         let len = (k + 4) & !3;
         let rev = &xr[R - k..R - k + len];
+        // Off the critical path: the linear terms and the cube's products with older squares
+        // (sq[k] is still zero here, so its term s·x_0 is folded in below and the vector loads
+        // never wait for a value stored just before).
+        let lin = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k];
+        let c_old = dot4(&sq[..len], rev);
         let s = dot4(&xp[..len], rev);
-        // sq[k] is still zero here: its term s·x_0 is added apart, so that the vector loads
-        // never wait for the store of a value computed just before.
-        let c = dot4(&sq[..len], rev) + s * xp[0];
         sq[k] = s;
-        let rhs = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k] + 3.0 * s - 2.0 * c;
+        // rhs = lin + 3s − 2(c_old + s·x_0)
+        let rhs = (lin - 2.0 * c_old) + s * three_minus_2x0;
         let xk2 = rhs * INV_PAIR[k];
         xp[k + 2] = xk2;
         xr[R - k - 2] = xk2;
