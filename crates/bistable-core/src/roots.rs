@@ -7,7 +7,7 @@
 //! polished to the last bit by safeguarded Newton iteration. A minimum that touches zero (grazing)
 //! survives halving down to a width of `2^-44` of the step and is reported as a root there.
 
-use crate::taylor::{eval, eval_d, BUF};
+use crate::taylor::{eval, BUF};
 
 /// Width (as a fraction of the step) below which an uncleared interval is reported as a touch.
 const MIN_WIDTH: f64 = 1.0 / (1u64 << 44) as f64;
