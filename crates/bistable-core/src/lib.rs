@@ -17,6 +17,7 @@
 
 pub mod audit;
 mod chatter;
+pub mod checkpoint;
 pub mod events;
 pub mod params;
 pub mod potential;
@@ -27,6 +28,7 @@ pub mod taylor;
 pub mod time;
 
 pub use audit::GapAudit;
+pub use checkpoint::{Checkpoint, PlateRecord};
 pub use events::{ContactMode, Event, Impact, StickCause, Well};
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};

@@ -63,6 +63,11 @@ impl Sinusoid {
         self.velocity
     }
 
+    /// `(origin, phase0, offset)` as given to [`Sinusoid::with_origin`].
+    pub fn origin(&self) -> (Instant, f64, f64) {
+        (self.origin, self.phase0, self.offset)
+    }
+
     /// Shaker period `2π/Ω`.
     pub fn period(&self) -> f64 {
         std::f64::consts::TAU / self.omega
@@ -158,6 +163,11 @@ impl PolyPiece {
     /// Instant up to which the piece is valid.
     pub fn end(&self) -> Instant {
         self.end
+    }
+
+    /// Coefficients `c_k` of `(τ − start)^k`, `k = 0..=5`.
+    pub fn coeffs(&self) -> [f64; MAX_POLY_DEGREE + 1] {
+        self.coeffs
     }
 
     fn series(&self, t: Instant, out: &mut [f64]) {

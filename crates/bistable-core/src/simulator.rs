@@ -10,6 +10,7 @@ use std::fmt;
 use std::ops::ControlFlow;
 
 use crate::chatter;
+use crate::checkpoint::{Checkpoint, PlateRecord};
 use crate::events::{ContactMode, Event, Impact, StickCause, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
@@ -294,18 +295,42 @@ impl Simulator {
             u0 >= 0.0,
             "must not be below the plate (x0 >= z(t0))",
         )?;
-        Ok(Self {
+        Ok(Self::fresh(
+            params,
+            opts,
+            plate,
+            start,
+            u0,
+            v0 - zd,
+            Well::of(x0),
+            x0 == BARRIER,
+        ))
+    }
+
+    /// A simulator at the start of a step at `t0` with gap `u0` and gap rate `w0`.
+    #[allow(clippy::too_many_arguments)]
+    fn fresh(
+        params: Params,
+        opts: SolverOptions,
+        plate: PlateMotion,
+        t0: Instant,
+        u0: f64,
+        w0: f64,
+        well: Well,
+        on_barrier: bool,
+    ) -> Self {
+        Self {
             params,
             opts,
             plate,
             order: opts.order(),
-            t0: start,
+            t0,
             mode: ContactMode::Free,
             u0,
-            w0: v0 - zd,
+            w0,
             pinned: usize::from(u0 == 0.0),
-            on_barrier: x0 == BARRIER,
-            well: Well::of(x0),
+            on_barrier,
+            well,
             step: Step {
                 len: 0.0,
                 end: StepEnd::Plain,
@@ -313,12 +338,12 @@ impl Simulator {
                 series: FlightSeries::default(),
             },
             live: false,
-            now: start,
+            now: t0,
             last_impact: None,
             last_impact_t: None,
             short_flights: 0,
             stats: Stats::default(),
-        })
+        }
     }
 
     /// Model parameters.
@@ -499,6 +524,67 @@ impl Simulator {
             .plate
             .continued_by_sinusoid(self.now, omega, velocity)?;
         self.set_plate(s.into())
+    }
+
+    /// A complete copy of the state (see [`Checkpoint`]).
+    pub fn checkpoint(&self) -> Checkpoint {
+        let tail = match self.step.end {
+            StepEnd::Stick(cause) if self.live && self.step.riding => Some((self.step.len, cause)),
+            _ => None,
+        };
+        Checkpoint {
+            zeta: self.params.zeta(),
+            restitution: self.params.restitution(),
+            tol: self.opts.tol(),
+            order: self.order,
+            chatter: self.opts.chatter(),
+            max_chatter_impacts: self.opts.max_chatter_impacts(),
+            plate: PlateRecord::of(&self.plate),
+            t0: self.t0.parts(),
+            mode: self.mode,
+            u0: self.u0,
+            w0: self.w0,
+            pinned: self.pinned as u8,
+            on_barrier: self.on_barrier,
+            well: self.well,
+            now: self.now.parts(),
+            last_impact: self.last_impact,
+            last_impact_t: self.last_impact_t.map(Instant::parts),
+            short_flights: self.short_flights,
+            stats: self.stats,
+            tail,
+        }
+    }
+
+    /// Rebuilds a simulator from a checkpoint, checking every value; it continues exactly as
+    /// the simulator the checkpoint was taken from.
+    pub fn from_checkpoint(c: &Checkpoint) -> Result<Self, SimError> {
+        let (params, opts, plate) = c.config()?;
+        let (t0, now, last_impact_t) = c.instants()?;
+        if let Some(h) = plate.horizon() {
+            if h < now {
+                return Err(SimError::BeyondPlate {
+                    horizon: h.to_f64(),
+                    requested: now.to_f64(),
+                });
+            }
+        }
+        let mut sim = Self::fresh(params, opts, plate, t0, c.u0, c.w0, c.well, c.on_barrier);
+        sim.now = now;
+        sim.mode = c.mode;
+        sim.pinned = usize::from(c.pinned);
+        sim.last_impact = c.last_impact;
+        sim.last_impact_t = last_impact_t;
+        sim.short_flights = c.short_flights;
+        sim.stats = c.stats;
+        sim.live = false;
+        if let Some((len, cause)) = c.tail {
+            sim.step.len = len;
+            sim.step.end = StepEnd::Stick(cause);
+            sim.step.riding = true;
+            sim.live = true;
+        }
+        Ok(sim)
     }
 
     /// Advances to `t` and returns the events on the way.

@@ -45,6 +45,13 @@ impl Instant {
         Self { hi: t, lo: 0.0 }
     }
 
+    /// The instant `hi + lo` from its two parts, which must be finite with `lo` below half an
+    /// ulp of `hi` (as [`Instant::parts`] returns them); `None` otherwise.
+    pub fn from_parts(hi: f64, lo: f64) -> Option<Self> {
+        let (s, e) = two_sum(hi, lo);
+        (hi.is_finite() && lo.is_finite() && s == hi && e == lo).then_some(Self { hi, lo })
+    }
+
     /// Nearest double.
     pub fn to_f64(self) -> f64 {
         self.hi + self.lo
