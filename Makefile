@@ -5,9 +5,15 @@ CARGO ?= cargo
 OUT ?= out
 BISTABLE := target/release/bistable
 
-.PHONY: all setup build test lint demo bench clean
+.PHONY: all setup build test test-rust lint demo bench clean
 
 all: build
+
+# Component makefiles (FMU, ROS 2 node, analyses) add their own test and demo steps to these.
+TEST_TARGETS := test-rust
+DEMO_TARGETS :=
+-include fmu/fmu.mk
+-include ros/ros.mk
 
 setup:
 	bash scripts/setup.sh
@@ -19,13 +25,16 @@ lint: setup
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
 
-## Every test: formatting, lints, Rust unit/integration/doc tests.
+## Every test: formatting, lints, Rust unit/integration/doc tests, and the components' suites.
 test: lint
-	$(CARGO) test --workspace
+	$(MAKE) --no-print-directory $(TEST_TARGETS)
 	@echo "make test: all suites passed"
 
+test-rust: setup
+	$(CARGO) test --workspace
+
 ## Builds everything and runs the paper's baseline case, writing plots and a summary under out/.
-demo: build
+demo: build $(DEMO_TARGETS)
 	mkdir -p $(OUT)
 	$(BISTABLE) simulate --omega 1.75 --velocity 0.07 --periods 200 \
 		--impacts $(OUT)/baseline_impacts.csv --plot $(OUT)/baseline --json > $(OUT)/baseline_summary.json
