@@ -31,38 +31,36 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
     if quadratic_min(d[0], d[1], if n >= 2 { d[2] } else { 0.0 }) + tail > 0.0 {
         return None;
     }
-    let b = bernstein(&d[..=n]);
-    let mut stack: Vec<(f64, f64, [f64; BUF])> = vec![(0.0, 1.0, b)];
-    while let Some((a, w, b)) = stack.pop() {
-        let b = &b[..=n];
-        if b.iter().all(|&v| v > 0.0) {
-            continue;
-        }
-        if b[0] <= 0.0 {
-            // p(a) ≤ 0 at the left end: the previous interval ended positive, so the crossing
-            // is at a (to within the previous interval's resolution).
-            return Some(polish(c, h, (a - w).max(0.0) * h, a * h, None));
-        }
-        let changes = b
-            .windows(2)
-            .filter(|p| (p[0] > 0.0) != (p[1] > 0.0))
-            .count();
-        if changes == 1 && b[n] <= 0.0 {
-            return Some(polish(c, h, a * h, (a + w) * h, Some((b[0], b[n]))));
-        }
-        if w <= MIN_WIDTH {
-            // A minimum within rounding of zero: a grazing contact.
-            let m = b.iter().copied().fold(f64::INFINITY, f64::min);
-            if m <= 0.0 {
-                return Some(((a + 0.5 * w) * h).min(h));
-            }
-            continue;
-        }
-        let (left, right) = split(b);
-        stack.push((a + 0.5 * w, 0.5 * w, right));
-        stack.push((a, 0.5 * w, left));
+    search(c, h, &bernstein(&d[..=n])[..=n], 0.0, 1.0)
+}
+
+/// Depth-first search of `[a, a + w]` (in units of the step) whose Bernstein coefficients are `b`,
+/// left half first, for the first crossing.
+fn search(c: &[f64], h: f64, b: &[f64], a: f64, w: f64) -> Option<f64> {
+    let n = b.len() - 1;
+    if b.iter().all(|&v| v > 0.0) {
+        return None;
     }
-    None
+    if b[0] <= 0.0 {
+        // p(a) ≤ 0 at the left end: the previous interval ended positive, so the crossing
+        // is at a (to within the previous interval's resolution).
+        return Some(polish(c, h, (a - w).max(0.0) * h, a * h, None));
+    }
+    let changes = b
+        .windows(2)
+        .filter(|p| (p[0] > 0.0) != (p[1] > 0.0))
+        .count();
+    if changes == 1 && b[n] <= 0.0 {
+        return Some(polish(c, h, a * h, (a + w) * h, Some((b[0], b[n]))));
+    }
+    if w <= MIN_WIDTH {
+        // A minimum within rounding of zero: a grazing contact.
+        let m = b.iter().copied().fold(f64::INFINITY, f64::min);
+        return (m <= 0.0).then(|| ((a + 0.5 * w) * h).min(h));
+    }
+    let (left, right) = split(b);
+    let half = 0.5 * w;
+    search(c, h, &left[..=n], a, half).or_else(|| search(c, h, &right[..=n], a + half, half))
 }
 
 /// Minimum of `a + bσ + cσ²` over `σ ∈ [0, 1]`.

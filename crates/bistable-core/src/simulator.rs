@@ -618,10 +618,14 @@ impl Simulator {
                 if !s.x[..=p + 1].iter().all(|c| c.is_finite()) {
                     return Err(nonfinite);
                 }
-                let mut gap = s.u;
-                gap[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
-                let gap = &gap[..=p + 1];
-                let Some(m) = gap.iter().position(|&c| c != 0.0) else {
+                // Coefficients known to vanish are skipped (taken as exactly zero).
+                let gap = &s.u[..=p + 1];
+                let Some(m) = gap
+                    .iter()
+                    .skip(self.pinned)
+                    .position(|&c| c != 0.0)
+                    .map(|m| m + self.pinned)
+                else {
                     // The mass rests exactly on a plate that exerts no force: stuck.
                     step.end = StepEnd::Stick(StickCause::Plastic);
                     return Ok(());
@@ -660,7 +664,7 @@ impl Simulator {
                 }
                 n[..self.pinned].iter_mut().for_each(|c| *c = 0.0);
                 let n = &n[..=p];
-                step.series.x = z;
+                step.series.x[..BUF].copy_from_slice(&z);
                 let m = n.iter().position(|&c| c != 0.0);
                 if m.is_some_and(|m| n[m] < 0.0) {
                     step.end = StepEnd::Release;

@@ -16,16 +16,17 @@ pub fn order_for(tol: f64) -> usize {
 }
 
 /// Coefficients of `x` and of the gap `u = x − z` over one free-flight step, up to `order + 1`.
+/// `x` is zero-padded past the last coefficient (the products read whole chunks of four).
 #[derive(Clone, Copy)]
 pub(crate) struct FlightSeries {
-    pub x: [f64; BUF],
+    pub x: [f64; PAD],
     pub u: [f64; BUF],
 }
 
 impl Default for FlightSeries {
     fn default() -> Self {
         Self {
-            x: [0.0; BUF],
+            x: [0.0; PAD],
             u: [0.0; BUF],
         }
     }
@@ -41,21 +42,19 @@ pub(crate) fn flight(
     order: usize,
     out: &mut FlightSeries,
 ) {
-    let FlightSeries { x, u } = out;
+    let FlightSeries { x: xp, u } = out;
     // x in reverse order (xr[R − j] = x_j) and zero beyond x_0, so that each Cauchy product is a
-    // dot product over a length rounded up to a multiple of 4.
+    // dot product over a length rounded up to a multiple of 4 (xp is zero past order + 1).
     let mut xr = [0.0; PAD];
     let mut sq = [0.0; PAD];
-    x[0] = u0 + z[0];
-    x[1] = w0 + z[1];
+    xp[0] = u0 + z[0];
+    xp[1] = w0 + z[1];
     u[0] = u0;
     u[1] = w0;
-    xr[R] = x[0];
-    xr[R - 1] = x[1];
-    let mut xp = [0.0; PAD];
-    xp[0] = x[0];
-    xp[1] = x[1];
-    let three_minus_2x0 = 3.0 - 2.0 * x[0];
+    xr[R] = xp[0];
+    xr[R - 1] = xp[1];
+    xp[order + 2..].iter_mut().for_each(|c| *c = 0.0);
+    let three_minus_2x0 = 3.0 - 2.0 * xp[0];
     for k in 0..order {
         let len = (k + 4) & !3;
         let rev = &xr[R - k..R - k + len];
@@ -73,7 +72,6 @@ pub(crate) fn flight(
         xr[R - k - 2] = xk2;
         u[k + 2] = xk2 - z[k + 2];
     }
-    x.copy_from_slice(&xp[..BUF]);
 }
 
 /// `1/((k+1)(k+2))`: the recurrence multiplies instead of dividing (a division per order would
@@ -89,7 +87,7 @@ const INV_PAIR: [f64; BUF] = {
 };
 
 /// Padded buffer length for the products (room for a dot product of length `BUF` rounded up).
-const PAD: usize = BUF + 8;
+pub(crate) const PAD: usize = BUF + 8;
 /// Index of `x_0` in the reversed buffer.
 const R: usize = BUF + 2;
 
