@@ -1,0 +1,187 @@
+//! Output helpers: full-precision numbers, CSV files, JSON on stdout.
+
+use std::fmt::Write as _;
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use serde::Serialize;
+
+use crate::error::CliError;
+
+/// Shortest decimal text that parses back to exactly `x` (Rust's round-trip formatting):
+/// positional for `1e-5 ≤ |x| < 1e16` and zero, scientific (`1.5e-7`) otherwise. Non-finite
+/// values print as `NaN`, `inf`, `-inf`.
+pub fn num(x: f64) -> String {
+    let mut s = String::new();
+    push_num(&mut s, x);
+    s
+}
+
+/// Appends [`num`]`(x)` to `s`.
+pub fn push_num(s: &mut String, x: f64) {
+    let a = x.abs();
+    // Writing to a String cannot fail.
+    let _ = if x == 0.0 || !x.is_finite() || (1e-5..1e16).contains(&a) {
+        write!(s, "{x}")
+    } else {
+        write!(s, "{x:e}")
+    };
+}
+
+/// A CSV field: a number, an integer, a text, or empty.
+#[derive(Debug, Clone, Copy)]
+pub enum Field<'a> {
+    /// Written with [`num`].
+    F(f64),
+    /// An integer.
+    I(u64),
+    /// Written as is (must not contain commas or quotes).
+    S(&'a str),
+    /// Nothing between the commas.
+    Empty,
+}
+
+/// A CSV file being written; errors name the file.
+pub struct CsvFile {
+    path: PathBuf,
+    out: BufWriter<File>,
+    line: String,
+}
+
+impl CsvFile {
+    /// Creates `path` (and missing parent directories) and writes the header line.
+    pub fn create(path: &Path, header: &str) -> Result<Self, CliError> {
+        create_parent(path)?;
+        let file = File::create(path).map_err(|e| CliError::io("cannot create", path, e))?;
+        let mut csv = Self {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+            line: String::with_capacity(256),
+        };
+        csv.write_line(header)?;
+        Ok(csv)
+    }
+
+    /// Writes one row.
+    pub fn row(&mut self, fields: &[Field<'_>]) -> Result<(), CliError> {
+        let mut line = std::mem::take(&mut self.line);
+        line.clear();
+        for (i, f) in fields.iter().enumerate() {
+            if i > 0 {
+                line.push(',');
+            }
+            match *f {
+                Field::F(x) => push_num(&mut line, x),
+                Field::I(n) => {
+                    let _ = write!(line, "{n}");
+                }
+                Field::S(s) => line.push_str(s),
+                Field::Empty => {}
+            }
+        }
+        let r = self.write_line(&line);
+        self.line = line;
+        r
+    }
+
+    fn write_line(&mut self, line: &str) -> Result<(), CliError> {
+        self.out
+            .write_all(line.as_bytes())
+            .and_then(|()| self.out.write_all(b"\n"))
+            .map_err(|e| CliError::io("cannot write", &self.path, e))
+    }
+
+    /// Flushes the file to disk.
+    pub fn finish(mut self) -> Result<PathBuf, CliError> {
+        self.out
+            .flush()
+            .map_err(|e| CliError::io("cannot write", &self.path, e))?;
+        Ok(self.path)
+    }
+}
+
+/// Creates the parent directory of `path` if it is missing.
+pub fn create_parent(path: &Path) -> Result<(), CliError> {
+    match path.parent() {
+        Some(dir) if !dir.as_os_str().is_empty() && !dir.exists() => create_dir(dir),
+        _ => Ok(()),
+    }
+}
+
+/// Creates `dir` and its parents.
+pub fn create_dir(dir: &Path) -> Result<(), CliError> {
+    std::fs::create_dir_all(dir).map_err(|e| CliError::io("cannot create directory", dir, e))
+}
+
+/// `<dir>/<stem><suffix>` for the file `path`, e.g. `out/impacts.csv` → `out/impacts_sticking.csv`.
+pub fn sibling(path: &Path, suffix: &str) -> PathBuf {
+    let stem = path
+        .file_stem()
+        .map(|s| s.to_string_lossy().into_owned())
+        .unwrap_or_default();
+    path.with_file_name(format!("{stem}{suffix}"))
+}
+
+/// Prints `value` as pretty JSON on stdout.
+pub fn print_json(value: &impl Serialize) -> Result<(), CliError> {
+    let mut text = serde_json::to_string_pretty(value).map_err(|e| {
+        CliError::io(
+            "cannot serialise the result for",
+            Path::new("<stdout>"),
+            e.into(),
+        )
+    })?;
+    text.push('\n');
+    print_text(&text)
+}
+
+/// Writes `text` to stdout. A closed pipe (`bistable … | head`) is not an error.
+pub fn print_text(text: &str) -> Result<(), CliError> {
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Err(e) if e.kind() != std::io::ErrorKind::BrokenPipe => {
+            Err(CliError::io("cannot write", Path::new("<stdout>"), e))
+        }
+        _ => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn numbers_round_trip() {
+        for x in [
+            0.0,
+            -0.0,
+            1.0,
+            0.07,
+            1.0 / 3.0,
+            std::f64::consts::TAU,
+            1e-7,
+            -2.5e-300,
+            1.2345678901234567e20,
+            f64::MIN_POSITIVE,
+            f64::MAX,
+        ] {
+            let s = num(x);
+            assert_eq!(s.parse::<f64>().unwrap().to_bits(), x.to_bits(), "{s}");
+        }
+        assert_eq!(num(0.5), "0.5");
+        assert_eq!(num(1e-7), "1e-7");
+    }
+
+    #[test]
+    fn sibling_names() {
+        assert_eq!(
+            sibling(Path::new("out/imp.csv"), "_sticking.csv"),
+            PathBuf::from("out/imp_sticking.csv")
+        );
+        assert_eq!(
+            sibling(Path::new("imp"), "_snaps.csv"),
+            PathBuf::from("imp_snaps.csv")
+        );
+    }
+}
