@@ -254,6 +254,16 @@ pub struct Simulator {
     last_impact_t: Option<Instant>,
     short_flights: u32,
     stats: Stats,
+    /// Variational state, when enabled: `Φ(t0)` and, for the current free step, the series of
+    /// its two columns' `δx`.
+    var: Option<Variational>,
+}
+
+/// The variational matrix `Φ = ∂(x, x')(t)/∂(x, x')(t_e)` from the instant `t_e` it was enabled.
+#[derive(Clone)]
+struct Variational {
+    phi: [[f64; 2]; 2],
+    cols: [[f64; BUF]; 2],
 }
 
 /// Flights shorter than this count towards the Zeno guard (time units).
@@ -343,6 +353,7 @@ impl Simulator {
             last_impact_t: None,
             short_flights: 0,
             stats: Stats::default(),
+            var: None,
         }
     }
 
@@ -498,7 +509,18 @@ impl Simulator {
             });
         }
         self.plate = plate;
-        self.t0 = now;
+        self.restart_at_now(&st, z, zd);
+        Ok(())
+    }
+
+    /// Makes the current time the start of a fresh step, with the plate at `(z, zd)` now.
+    fn restart_at_now(&mut self, st: &State, z: f64, zd: f64) {
+        if let Some(phi) = self.variational() {
+            if let Some(v) = self.var.as_mut() {
+                v.phi = phi;
+            }
+        }
+        self.t0 = self.now;
         if st.mode == ContactMode::Free {
             self.u0 = (st.x - z).max(0.0);
             self.w0 = st.v - zd;
@@ -513,7 +535,53 @@ impl Simulator {
         }
         self.on_barrier = false;
         self.live = false;
-        Ok(())
+    }
+
+    /// Starts integrating the variational equations along the trajectory from now on, with
+    /// `Φ = I` now (through impacts by the saltation matrix of `model.md` Sec. 4; `Φ = 0` once
+    /// the mass sticks, since sticking forgets the initial state).
+    pub fn enable_variational(&mut self) {
+        let st = self.state();
+        self.var = Some(Variational {
+            phi: [[1.0, 0.0], [0.0, 1.0]],
+            cols: [[0.0; BUF]; 2],
+        });
+        self.restart_at_now(&st, st.z, st.zdot);
+        if let Some(v) = self.var.as_mut() {
+            v.phi = [[1.0, 0.0], [0.0, 1.0]];
+        }
+    }
+
+    /// `Φ(now)`, row-major over `(x, x')`, if enabled.
+    pub fn variational(&self) -> Option<[[f64; 2]; 2]> {
+        let v = self.var.as_ref()?;
+        let s = self.now.since(self.t0);
+        if !self.live || s == 0.0 || self.step.riding {
+            return Some(if self.live && self.step.riding && s > 0.0 {
+                [[0.0; 2]; 2]
+            } else {
+                v.phi
+            });
+        }
+        let q = self.order + 1;
+        let (a, da) = eval_d(&v.cols[0][..=q], s);
+        let (b, db) = eval_d(&v.cols[1][..=q], s);
+        Some([[a, b], [da, db]])
+    }
+
+    /// Divides `Φ` by its largest entry (in magnitude) and returns the natural log of that
+    /// factor, for Lyapunov exponents; `None` if not enabled or `Φ = 0`.
+    pub fn renormalize_variational(&mut self) -> Option<f64> {
+        let phi = self.variational()?;
+        let norm = phi.iter().flatten().fold(0.0_f64, |m, v| m.max(v.abs()));
+        if norm == 0.0 || !norm.is_finite() {
+            return None;
+        }
+        let v = self.var.as_mut()?;
+        let r = 1.0 / norm;
+        v.phi.iter_mut().flatten().for_each(|c| *c *= r);
+        v.cols.iter_mut().flatten().for_each(|c| *c *= r);
+        Some(norm.ln())
     }
 
     /// Switches to a sinusoidal shaker with frequency `omega` and velocity amplitude `velocity`
@@ -640,6 +708,11 @@ impl Simulator {
                     };
                     return Ok(());
                 }
+                if let Some(v) = self.var.as_mut() {
+                    for j in 0..2 {
+                        v.cols[j] = taylor::variation(zeta, s, p, v.phi[0][j], v.phi[1][j]);
+                    }
+                }
                 let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol).min(room);
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
@@ -724,6 +797,11 @@ impl Simulator {
         let (u1, w1) = if step.len == 0.0 {
             (self.u0, self.w0)
         } else {
+            if let Some(v) = self.var.as_mut() {
+                let (a, da) = eval_d(&v.cols[0][..=p + 1], step.len);
+                let (b, db) = eval_d(&v.cols[1][..=p + 1], step.len);
+                v.phi = [[a, b], [da, db]];
+            }
             eval_d(&step.series.u[..=p + 1], step.len)
         };
         let end = step.end;
@@ -768,6 +846,9 @@ impl Simulator {
         obs: &mut impl Observer,
     ) -> ControlFlow<()> {
         self.pinned = usize::from(pin_force);
+        if let Some(v) = self.var.as_mut() {
+            v.phi = [[0.0; 2]; 2];
+        }
         self.mode = ContactMode::Sticking;
         self.stats.sticks += 1;
         self.short_flights = 0;
@@ -813,6 +894,19 @@ impl Simulator {
         self.w0 = w_plus;
         self.pinned = if w_plus == 0.0 { 2 } else { 1 };
         let force = zdd + 2.0 * self.params.zeta() * zd + potential::force(z);
+        if let Some(v) = self.var.as_mut() {
+            // Saltation matrix (model.md Sec. 4): S = [[−e, 0], [−(1+e)N/w₋, −e]].
+            let s21 = if w_minus < 0.0 {
+                -(1.0 + e) * force / w_minus
+            } else {
+                0.0
+            };
+            let phi = v.phi;
+            for j in 0..2 {
+                v.phi[0][j] = -e * phi[0][j];
+                v.phi[1][j] = s21 * phi[0][j] - e * phi[1][j];
+            }
+        }
         let decision = chatter::decide(
             self.opts.chatter(),
             e,

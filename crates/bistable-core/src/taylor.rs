@@ -21,6 +21,8 @@ pub fn order_for(tol: f64) -> usize {
 pub(crate) struct FlightSeries {
     pub x: [f64; PAD],
     pub u: [f64; BUF],
+    /// Coefficients of `x²` (orders `0..order`), for the variational equations.
+    pub sq: [f64; PAD],
 }
 
 impl Default for FlightSeries {
@@ -28,6 +30,7 @@ impl Default for FlightSeries {
         Self {
             x: [0.0; PAD],
             u: [0.0; BUF],
+            sq: [0.0; PAD],
         }
     }
 }
@@ -42,11 +45,12 @@ pub(crate) fn flight(
     order: usize,
     out: &mut FlightSeries,
 ) {
-    let FlightSeries { x: xp, u } = out;
+    let FlightSeries { x: xp, u, sq } = out;
     // x in reverse order (xr[R − j] = x_j) and zero beyond x_0, so that each Cauchy product is a
-    // dot product over a length rounded up to a multiple of 4 (xp is zero past order + 1).
+    // dot product over a length rounded up to a multiple of 4 (xp and sq are zero past what is
+    // computed).
     let mut xr = [0.0; PAD];
-    let mut sq = [0.0; PAD];
+    sq.iter_mut().for_each(|c| *c = 0.0);
     xp[0] = u0 + z[0];
     xp[1] = w0 + z[1];
     u[0] = u0;
@@ -103,6 +107,31 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
         }
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// One column of the variational equation `δx'' = −2ζδx' − U''(x)δx` along a flight series, from
+/// `(δx, δx')` at the step start: coefficients `0..=order + 1` into `out`.
+pub(crate) fn variation(
+    zeta: f64,
+    s: &FlightSeries,
+    order: usize,
+    d0: f64,
+    dv0: f64,
+) -> [f64; BUF] {
+    // U''(x) = 1 − 6x + 6x², as a series.
+    let mut a = [0.0; BUF];
+    for k in 0..order {
+        a[k] = 6.0 * (s.sq[k] - s.x[k]);
+    }
+    a[0] += 1.0;
+    let mut d = [0.0; BUF];
+    d[0] = d0;
+    d[1] = dv0;
+    for k in 0..order {
+        let conv: f64 = (0..=k).map(|i| a[i] * d[k - i]).sum();
+        d[k + 2] = (-2.0 * zeta * (k + 1) as f64 * d[k + 1] - conv) * INV_PAIR[k];
+    }
+    d
 }
 
 /// Contact force `N = z̈ + 2ζż + U'(z)` (Eq. 9) as a series, coefficients `0..=order`, from plate
