@@ -62,7 +62,7 @@ pub struct CommonArgs {
     #[arg(
         long,
         value_name = "TOL",
-        default_value = "1e-15",
+        default_value = "1e-16",
         allow_negative_numbers = true
     )]
     pub tol: f64,

@@ -62,10 +62,10 @@ fn impacts_csv_matches_the_core_event_list() {
     let (header, rows) = read_csv(&csv);
     assert_eq!(header, "index,t,phase,x,v_before,v_after,delta_k");
 
-    // The same case straight from the core, with the CLI's documented defaults (tol 1e-15, the
-    // core's default accumulation rule).
+    // The same case straight from the core, with the CLI's documented defaults (the core's
+    // default tolerance and accumulation rule).
     let plate = Sinusoid::new(1.75, 0.07).unwrap();
-    let opts = SolverOptions::new(1e-15, SolverOptions::default().chatter()).unwrap();
+    let opts = SolverOptions::default();
     let mut sim = Simulator::new(Params::new(0.02, 0.85).unwrap(), plate.into(), opts).unwrap();
     let impacts: Vec<_> = sim
         .events_until(30.0 * std::f64::consts::TAU)
@@ -143,7 +143,7 @@ fn sticking_and_snaps_files_match_the_core() {
         s(&csv),
     ]);
     assert!(o.status.success(), "{}", stderr(&o));
-    let opts = SolverOptions::new(1e-15, ChatterRule::paper()).unwrap();
+    let opts = SolverOptions::new(SolverOptions::default().tol(), ChatterRule::paper()).unwrap();
     let plate = Sinusoid::new(0.2, 0.05).unwrap();
     let mut sim = Simulator::new(Params::paper(), plate.into(), opts).unwrap();
     let events = sim.events_until(60.0).unwrap();
@@ -358,7 +358,7 @@ fn json_summary_has_the_documented_keys() {
     assert_eq!(j["velocity"], 0.07);
     assert_eq!(j["zeta"], 0.02);
     assert_eq!(j["restitution"], 0.85);
-    assert_eq!(j["tol"], 1e-15);
+    assert_eq!(j["tol"], SolverOptions::default().tol());
     assert_eq!(j["t_end"], 100.0);
     assert_eq!(j["final_state"]["t"], 100.0);
     assert_eq!(j["final_well"], 1);

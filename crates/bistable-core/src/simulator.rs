@@ -709,9 +709,11 @@ impl Simulator {
                     return Ok(());
                 }
                 if let Some(v) = self.var.as_mut() {
-                    for j in 0..2 {
-                        v.cols[j] = taylor::variation(zeta, s, p, v.phi[0][j], v.phi[1][j]);
-                    }
+                    let [dx, dv] = v.phi;
+                    v.cols = [
+                        taylor::variation(zeta, s, p, dx[0], dv[0]),
+                        taylor::variation(zeta, s, p, dx[1], dv[1]),
+                    ];
                 }
                 let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol).min(room);
                 if h.is_nan() || h < 0.0 {
@@ -901,11 +903,11 @@ impl Simulator {
             } else {
                 0.0
             };
-            let phi = v.phi;
-            for j in 0..2 {
-                v.phi[0][j] = -e * phi[0][j];
-                v.phi[1][j] = s21 * phi[0][j] - e * phi[1][j];
-            }
+            let [a, b] = v.phi;
+            v.phi = [
+                [-e * a[0], -e * a[1]],
+                [s21 * a[0] - e * b[0], s21 * a[1] - e * b[1]],
+            ];
         }
         let decision = chatter::decide(
             self.opts.chatter(),

@@ -120,8 +120,8 @@ pub(crate) fn variation(
 ) -> [f64; BUF] {
     // U''(x) = 1 − 6x + 6x², as a series.
     let mut a = [0.0; BUF];
-    for k in 0..order {
-        a[k] = 6.0 * (s.sq[k] - s.x[k]);
+    for ((ak, sq), x) in a.iter_mut().zip(&s.sq).zip(&s.x).take(order) {
+        *ak = 6.0 * (sq - x);
     }
     a[0] += 1.0;
     let mut d = [0.0; BUF];

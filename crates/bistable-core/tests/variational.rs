@@ -1,5 +1,6 @@
 //! The variational matrix through flights and impacts: against central finite differences of
 //! the flow, and against the determinant identity det Φ = e^(2·impacts)·exp(−2ζτ).
+#![allow(clippy::needless_range_loop)] // 2×2 matrix loops read best with indices
 
 use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
 
