@@ -1,0 +1,642 @@
+//! The 34 FMI 2.0 common and co-simulation functions with C linkage.
+//!
+//! # Safety
+//! Callers pass pointers as the FMI 2.0 standard specifies: valid for the lengths given, strings
+//! NUL-terminated, the component a live handle from `fmi2Instantiate`. Within that contract every
+//! function checks its arguments (NULL, unknown value references, ranges, lifecycle state),
+//! refuses bad ones with `fmi2Error` and a logged reason, and never lets a panic unwind into the
+//! host (a caught panic puts the instance into the error state).
+#![allow(non_snake_case, clippy::missing_safety_doc)]
+
+use std::ffi::{c_char, CStr, CString};
+use std::panic::{catch_unwind, AssertUnwindSafe};
+use std::ptr;
+
+use crate::fmi2::*;
+use crate::instance::{allowed, Instance, Lifecycle, Outcome};
+use crate::md::{cat, Kind, GUID};
+use crate::state::Snapshot;
+
+/// Largest array length accepted from a host (guards the slice construction).
+const MAX_LEN: usize = 1 << 28;
+
+/// The instance behind a handle, if it looks live.
+unsafe fn instance<'a>(c: fmi2Component) -> Option<&'a mut Instance> {
+    let inst = c.cast::<Instance>().as_mut()?;
+    inst.is_live().then_some(inst)
+}
+
+fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
+    p.downcast_ref::<&str>()
+        .map(|s| s.to_string())
+        .or_else(|| p.downcast_ref::<String>().cloned())
+        .unwrap_or_else(|| "panic".into())
+}
+
+/// Runs `f` on the instance if `func` is allowed in its state, logging a refusal; a panic is
+/// caught, logged and leaves the instance in the error state.
+fn call(
+    c: fmi2Component,
+    func: &str,
+    mask: allowed::Mask,
+    f: impl FnOnce(&mut Instance) -> Outcome,
+) -> fmi2Status {
+    // SAFETY: FMI contract (module documentation).
+    let Some(inst) = (unsafe { instance(c) }) else {
+        return fmi2Error;
+    };
+    let inst: *mut Instance = inst;
+    let run = catch_unwind(AssertUnwindSafe(|| {
+        // SAFETY: checked above; only this call uses the instance.
+        let inst = unsafe { &mut *inst };
+        if !allowed::contains(mask, inst.lifecycle) {
+            let msg = format!("not allowed in state {:?}", inst.lifecycle);
+            inst.log_error(func, &msg);
+            return fmi2Error;
+        }
+        f(inst).unwrap_or_else(|msg| {
+            inst.log_error(func, &msg);
+            fmi2Error
+        })
+    }));
+    run.unwrap_or_else(|p| {
+        // SAFETY: as above; the closure that panicked no longer uses it.
+        let inst = unsafe { &mut *inst };
+        inst.lifecycle = Lifecycle::Error;
+        let msg = format!("{func}: internal error: {}", panic_text(p.as_ref()));
+        let _ = catch_unwind(AssertUnwindSafe(|| {
+            inst.log(fmi2Fatal, cat::logStatusFatal, &msg)
+        }));
+        fmi2Error
+    })
+}
+
+/// A host array of `n` elements (NULL allowed only when `n == 0`).
+unsafe fn array<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], String> {
+    match n {
+        0 => Ok(&[]),
+        n if n > MAX_LEN => Err(format!("{what}: length {n} is too large")),
+        _ if p.is_null() => Err(format!("{what} is NULL")),
+        _ => Ok(std::slice::from_raw_parts(p, n)),
+    }
+}
+
+/// A host output array of `n` elements.
+unsafe fn array_mut<'a, T>(p: *mut T, n: usize, what: &str) -> Result<&'a mut [T], String> {
+    array(p, n, what)?;
+    Ok(if n == 0 {
+        &mut []
+    } else {
+        std::slice::from_raw_parts_mut(p, n)
+    })
+}
+
+/// A host pointer to one value to write.
+unsafe fn out<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, String> {
+    p.as_mut().ok_or_else(|| format!("{what} is NULL"))
+}
+
+/// A host string (lossy UTF-8).
+unsafe fn text(p: fmi2String, what: &str) -> Result<String, String> {
+    if p.is_null() {
+        return Err(format!("{what} is NULL"));
+    }
+    Ok(CStr::from_ptr(p).to_string_lossy().into_owned())
+}
+
+// ---- common functions ----
+
+#[no_mangle]
+pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
+    c"default".as_ptr()
+}
+
+#[no_mangle]
+pub extern "C" fn fmi2GetVersion() -> *const c_char {
+    c"2.0".as_ptr()
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetDebugLogging(
+    c: fmi2Component,
+    loggingOn: fmi2Boolean,
+    nCategories: usize,
+    categories: *const fmi2String,
+) -> fmi2Status {
+    call(c, "fmi2SetDebugLogging", allowed::ANY, |inst| {
+        let names = array(categories, nCategories, "categories")?
+            .iter()
+            .map(|&s| text(s, "category"))
+            .collect::<Result<Vec<_>, _>>()?;
+        inst.set_debug_logging(loggingOn != fmi2False, &names)
+    })
+}
+
+/// Checks the arguments of `fmi2Instantiate`; `log` reports a refusal.
+unsafe fn instantiate(
+    name: fmi2String,
+    kind: fmi2Type,
+    guid: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    logging_on: fmi2Boolean,
+) -> fmi2Component {
+    let Some(f) = functions.as_ref() else {
+        return ptr::null_mut();
+    };
+    let given = text(name, "instanceName").unwrap_or_default();
+    let cname = CString::new(given.clone()).unwrap_or_default();
+    let inst = Instance::new(
+        cname,
+        f.componentEnvironment,
+        f.logger,
+        logging_on != fmi2False,
+    );
+    let checked = (|| {
+        if given.is_empty() {
+            return Err("instanceName must be a non-empty string".to_string());
+        }
+        if kind != fmi2CoSimulation {
+            return Err(format!(
+                "fmuType = {kind}: this FMU provides co-simulation only (fmi2CoSimulation = {fmi2CoSimulation})"
+            ));
+        }
+        let g = text(guid, "fmuGUID")?;
+        if g != GUID {
+            return Err(format!(
+                "fmuGUID {g} does not match this binary's {GUID}: modelDescription.xml and binary come from different builds"
+            ));
+        }
+        Ok(())
+    })();
+    match checked {
+        Ok(()) => Box::into_raw(Box::new(inst)).cast(),
+        Err(msg) => {
+            inst.log_error("fmi2Instantiate", &msg);
+            ptr::null_mut()
+        }
+    }
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Instantiate(
+    instanceName: fmi2String,
+    fmuType: fmi2Type,
+    fmuGUID: fmi2String,
+    _fmuResourceLocation: fmi2String,
+    functions: *const fmi2CallbackFunctions,
+    _visible: fmi2Boolean,
+    loggingOn: fmi2Boolean,
+) -> fmi2Component {
+    catch_unwind(|| instantiate(instanceName, fmuType, fmuGUID, functions, loggingOn))
+        .unwrap_or(ptr::null_mut())
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
+    let _ = catch_unwind(|| {
+        if let Some(inst) = instance(c) {
+            inst.retire();
+            drop(Box::from_raw(c.cast::<Instance>()));
+        }
+    });
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetupExperiment(
+    c: fmi2Component,
+    toleranceDefined: fmi2Boolean,
+    tolerance: fmi2Real,
+    startTime: fmi2Real,
+    stopTimeDefined: fmi2Boolean,
+    stopTime: fmi2Real,
+) -> fmi2Status {
+    let tol = (toleranceDefined != fmi2False).then_some(tolerance);
+    let stop = (stopTimeDefined != fmi2False).then_some(stopTime);
+    call(c, "fmi2SetupExperiment", allowed::INSTANTIATED, |inst| {
+        inst.setup_experiment(startTime, stop, tol)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(
+        c,
+        "fmi2EnterInitializationMode",
+        allowed::INSTANTIATED,
+        |inst| inst.enter_initialization(),
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2ExitInitializationMode", allowed::INIT, |inst| {
+        inst.exit_initialization()
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2Terminate", allowed::TERMINATE, |inst| {
+        inst.terminate()
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2Reset", allowed::ANY, |inst| inst.reset())
+}
+
+// ---- getting and setting values ----
+
+/// `fmi2Get<T>`: values of type `kind`, converted by `conv`.
+unsafe fn get_values<T>(
+    c: fmi2Component,
+    func: &str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut T,
+    kind: Kind,
+    conv: fn(f64) -> T,
+) -> fmi2Status {
+    call(c, func, allowed::GET, |inst| {
+        let vrs = array(vr, nvr, "vr")?;
+        let dst = array_mut(value, nvr, "value")?;
+        for (d, v) in dst.iter_mut().zip(inst.get(vrs, kind)?) {
+            *d = conv(v);
+        }
+        Ok(fmi2OK)
+    })
+}
+
+/// `fmi2Set<T>`: values of type `kind`, converted by `conv` (range-checked by the instance).
+unsafe fn set_values<T: Copy>(
+    c: fmi2Component,
+    func: &str,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const T,
+    kind: Kind,
+    conv: fn(T) -> f64,
+) -> fmi2Status {
+    call(c, func, allowed::SET, |inst| {
+        let vrs = array(vr, nvr, "vr")?;
+        let vals: Vec<f64> = array(value, nvr, "value")?
+            .iter()
+            .map(|&v| conv(v))
+            .collect();
+        inst.set(vrs, &vals, kind)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    get_values(c, "fmi2GetReal", vr, nvr, value, Kind::Real, |v| v)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    get_values(c, "fmi2GetInteger", vr, nvr, value, Kind::Integer, |v| {
+        v as fmi2Integer
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    get_values(c, "fmi2GetBoolean", vr, nvr, value, Kind::Boolean, |v| {
+        if v != 0.0 {
+            fmi2True
+        } else {
+            fmi2False
+        }
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    get_values(c, "fmi2GetString", vr, nvr, value, Kind::String, |_| {
+        ptr::null()
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetReal(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    set_values(c, "fmi2SetReal", vr, nvr, value, Kind::Real, |v| v)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetInteger(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Integer,
+) -> fmi2Status {
+    set_values(
+        c,
+        "fmi2SetInteger",
+        vr,
+        nvr,
+        value,
+        Kind::Integer,
+        f64::from,
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetBoolean(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2Boolean,
+) -> fmi2Status {
+    set_values(
+        c,
+        "fmi2SetBoolean",
+        vr,
+        nvr,
+        value,
+        Kind::Boolean,
+        f64::from,
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetString(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    value: *const fmi2String,
+) -> fmi2Status {
+    set_values(c, "fmi2SetString", vr, nvr, value, Kind::String, |_| {
+        f64::NAN
+    })
+}
+
+// ---- FMU states ----
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetFMUstate(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, "fmi2GetFMUstate", allowed::ANY, |inst| {
+        let slot = out(FMUstate, "FMUstate")?;
+        let snap = inst.snapshot();
+        store(inst, slot, snap)
+    })
+}
+
+/// Puts `snap` into the state `*slot` (reused when non-NULL, else a new one).
+fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot) -> Outcome {
+    if slot.is_null() {
+        *slot = inst.register(snap);
+    } else {
+        *inst.state_ref(*slot)? = snap;
+    }
+    Ok(fmi2OK)
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
+    call(c, "fmi2SetFMUstate", allowed::ANY, |inst| {
+        let snap = inst.state_ref(FMUstate)?.clone();
+        inst.restore(&snap)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2FreeFMUstate(
+    c: fmi2Component,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, "fmi2FreeFMUstate", allowed::ANY, |inst| {
+        let slot = out(FMUstate, "FMUstate")?;
+        if !slot.is_null() {
+            inst.free_state(*slot)?;
+            *slot = ptr::null_mut();
+        }
+        Ok(fmi2OK)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
+    c: fmi2Component,
+    FMUstate: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    call(c, "fmi2SerializedFMUstateSize", allowed::ANY, |inst| {
+        let size = out(size, "size")?;
+        *size = inst.state_ref(FMUstate)?.serialize().len();
+        Ok(fmi2OK)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SerializeFMUstate(
+    c: fmi2Component,
+    FMUstate: fmi2FMUstate,
+    serializedState: *mut fmi2Byte,
+    size: usize,
+) -> fmi2Status {
+    call(c, "fmi2SerializeFMUstate", allowed::ANY, |inst| {
+        let bytes = inst.state_ref(FMUstate)?.serialize();
+        if size < bytes.len() {
+            return Err(format!(
+                "buffer of {size} bytes is too small: {} needed",
+                bytes.len()
+            ));
+        }
+        let dst = array_mut(serializedState.cast::<u8>(), bytes.len(), "serializedState")?;
+        dst.copy_from_slice(&bytes);
+        Ok(fmi2OK)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
+    c: fmi2Component,
+    serializedState: *const fmi2Byte,
+    size: usize,
+    FMUstate: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, "fmi2DeSerializeFMUstate", allowed::ANY, |inst| {
+        let slot = out(FMUstate, "FMUstate")?;
+        let bytes = array(serializedState.cast::<u8>(), size, "serializedState")?;
+        let snap = Snapshot::deserialize(bytes)?;
+        Instance::validate(&snap)?;
+        store(inst, slot, snap)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
+    c: fmi2Component,
+    _vUnknown_ref: *const fmi2ValueReference,
+    _nUnknown: usize,
+    _vKnown_ref: *const fmi2ValueReference,
+    _nKnown: usize,
+    _dvKnown: *const fmi2Real,
+    _dvUnknown: *mut fmi2Real,
+) -> fmi2Status {
+    call(c, "fmi2GetDirectionalDerivative", allowed::ANY, |_| {
+        Err("directional derivatives are not provided (providesDirectionalDerivative=false)".into())
+    })
+}
+
+// ---- co-simulation ----
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *const fmi2Real,
+) -> fmi2Status {
+    call(c, "fmi2SetRealInputDerivatives", allowed::SET, |inst| {
+        let vrs = array(vr, nvr, "vr")?;
+        let orders = array(order, nvr, "order")?;
+        let vals = array(value, nvr, "value")?;
+        inst.set_input_derivatives(vrs, orders, vals)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
+    c: fmi2Component,
+    vr: *const fmi2ValueReference,
+    nvr: usize,
+    order: *const fmi2Integer,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    call(
+        c,
+        "fmi2GetRealOutputDerivatives",
+        allowed::GET_DERIVATIVES,
+        |inst| {
+            let vrs = array(vr, nvr, "vr")?;
+            let orders = array(order, nvr, "order")?;
+            let dst = array_mut(value, nvr, "value")?;
+            dst.copy_from_slice(&inst.output_derivatives(vrs, orders)?);
+            Ok(fmi2OK)
+        },
+    )
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2DoStep(
+    c: fmi2Component,
+    currentCommunicationPoint: fmi2Real,
+    communicationStepSize: fmi2Real,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+) -> fmi2Status {
+    call(c, "fmi2DoStep", allowed::STEP, |inst| {
+        inst.do_step(currentCommunicationPoint, communicationStepSize)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2CancelStep", allowed::ANY, |_| {
+        Err("no asynchronous step is in progress: fmi2DoStep is synchronous".into())
+    })
+}
+
+/// `fmi2Get*Status` for a kind the instance answers with `get` (`None`: not available, which
+/// returns `fmi2Discard`).
+fn status<T>(
+    c: fmi2Component,
+    func: &str,
+    value: *mut T,
+    get: impl FnOnce(&Instance) -> Result<Option<T>, String>,
+) -> fmi2Status {
+    call(c, func, allowed::STATUS, |inst| {
+        // SAFETY: FMI contract (module documentation).
+        let dst = unsafe { out(value, "value")? };
+        Ok(match get(inst)? {
+            Some(v) => {
+                *dst = v;
+                fmi2OK
+            }
+            None => fmi2Discard,
+        })
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Status,
+) -> fmi2Status {
+    status(c, "fmi2GetStatus", value, |inst| {
+        inst.other_status(s).map(|_| None)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetRealStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Real,
+) -> fmi2Status {
+    status(c, "fmi2GetRealStatus", value, |inst| inst.real_status(s))
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetIntegerStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Integer,
+) -> fmi2Status {
+    status(c, "fmi2GetIntegerStatus", value, |inst| {
+        inst.other_status(s).map(|_| None)
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetBooleanStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2Boolean,
+) -> fmi2Status {
+    status(c, "fmi2GetBooleanStatus", value, |inst| {
+        inst.boolean_status(s).map(|b| b.map(fmi2Boolean::from))
+    })
+}
+
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetStringStatus(
+    c: fmi2Component,
+    s: fmi2StatusKind,
+    value: *mut fmi2String,
+) -> fmi2Status {
+    status(c, "fmi2GetStringStatus", value, |inst| {
+        inst.other_status(s).map(|_| None)
+    })
+}
