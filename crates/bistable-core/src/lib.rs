@@ -18,19 +18,23 @@
 pub mod audit;
 mod chatter;
 pub mod checkpoint;
+pub mod classify;
 pub mod events;
 pub mod params;
 pub mod potential;
 mod roots;
 pub mod shaker;
+pub mod shooting;
 pub mod simulator;
 pub mod taylor;
 pub mod time;
 
 pub use audit::GapAudit;
 pub use checkpoint::{Checkpoint, PlateRecord};
+pub use classify::{classify, largest_lyapunov, Classification, ClassifyOptions, ResponseClass};
 pub use events::{ContactMode, Event, Impact, StickCause, Well};
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
+pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
 pub use simulator::{Observer, SimError, Simulator, State, Stats, StepView};
 pub use time::Instant;

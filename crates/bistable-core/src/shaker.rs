@@ -68,6 +68,23 @@ impl Sinusoid {
         (self.origin, self.phase0, self.offset)
     }
 
+    /// The instant of the `k`-th plate phase zero after the origin, `τs + (2πk − φs)/Ω`, in
+    /// two-double precision (stroboscopic Poincaré sections without drift at long times).
+    pub fn section(&self, k: u64) -> Instant {
+        use crate::time::{two_prod, two_sum, TWO_PI};
+        let kf = k as f64;
+        // a = 2πk − φs as a double-double.
+        let (p, pe) = two_prod(kf, TWO_PI.0);
+        let pe = pe + kf * TWO_PI.1;
+        let (a, e2) = two_sum(p, -self.phase0);
+        let al = pe + e2;
+        // q = a/Ω, with the remainder of the first quotient folded into the second.
+        let q1 = a / self.omega;
+        let (m, me) = two_prod(q1, self.omega);
+        let q2 = ((a - m) - me + al) / self.omega;
+        self.origin + q1 + q2
+    }
+
     /// Shaker period `2π/Ω`.
     pub fn period(&self) -> f64 {
         std::f64::consts::TAU / self.omega
@@ -291,6 +308,19 @@ mod tests {
             let d = (ph - expected).abs();
             assert!(d.min(1.0 - d) < 1e-13, "Ω={omega}: {ph} vs {expected}");
         }
+    }
+
+    #[test]
+    fn sections_are_at_phase_zero_without_drift() {
+        let s = Sinusoid::new(1.75, 0.07).unwrap();
+        for k in [1, 17, 36_000, 1_000_000] {
+            let ph = s.phase_cycles(s.section(k));
+            assert!(ph.min(1.0 - ph) < 1e-15, "k = {k}: {ph}");
+        }
+        let moved = s.with_origin(Instant::new(3.0), 1.0, 0.0).unwrap();
+        let ph = moved.phase_cycles(moved.section(5));
+        assert!(ph.min(1.0 - ph) < 1e-15);
+        assert!(moved.section(0) < Instant::new(3.0));
     }
 
     #[test]

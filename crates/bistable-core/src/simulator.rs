@@ -16,6 +16,8 @@ use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
 use crate::roots::first_root;
 use crate::shaker::PlateMotion;
+#[cfg(doc)]
+use crate::shaker::Sinusoid;
 use crate::taylor::{self, eval, eval_d, FlightSeries, BUF};
 use crate::time::Instant;
 
@@ -435,7 +437,18 @@ impl Simulator {
     /// was reached (`true`) or the observer stopped the run at the current time (`false`).
     pub fn advance(&mut self, t: f64, obs: &mut impl Observer) -> Result<bool, SimError> {
         check("t", t, true, "must be finite")?;
-        let target = Instant::new(t);
+        self.advance_instant(Instant::new(t), obs)
+    }
+
+    /// [`Simulator::advance`] to an instant given in full two-double precision (e.g. an exact
+    /// stroboscopic section, [`Sinusoid::section`]).
+    pub fn advance_instant(
+        &mut self,
+        target: Instant,
+        obs: &mut impl Observer,
+    ) -> Result<bool, SimError> {
+        let t = target.to_f64();
+        check("t", t, true, "must be finite")?;
         if target < self.now {
             return Err(SimError::BackwardTime {
                 now: self.time(),

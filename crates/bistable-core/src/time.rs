@@ -95,7 +95,7 @@ impl Instant {
 }
 
 /// `2π` as an unevaluated sum of three doubles.
-const TWO_PI: (f64, f64, f64) = (
+pub(crate) const TWO_PI: (f64, f64, f64) = (
     std::f64::consts::TAU,
     2.4492935982947064e-16,
     -5.989539619436679e-33,

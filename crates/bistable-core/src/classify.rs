@@ -1,0 +1,307 @@
+//! Response classes of the paper's map (Sec. 3.4, Fig. 9), decided as early as possible.
+//!
+//! The run starts from the paper's initial condition and is sampled once per shaker period (the
+//! stroboscopic section at plate phase 0). It stops as soon as the class is decided:
+//! - **periodic**: for the smallest `p ≤ max_period`, the section points `p` periods apart agree
+//!   to `period_tol` for `max(3p, 8)` consecutive sections;
+//! - **at rest in well 2**: in well 2 with energy below the barrier and a lowest turning point
+//!   above the plate's highest position, so that no impact or snap-through can happen again;
+//! - otherwise the run goes on to `max_natural_periods` and is **aperiodic**; its largest
+//!   Lyapunov exponent then tells whether it is chaotic.
+//!
+//! The class comes from the snap-throughs: none (intrawell), only before the steady state
+//! (transient interwell), or on the steady-state orbit (continuous interwell).
+
+use std::collections::VecDeque;
+
+use crate::events::{Event, Well};
+use crate::params::{Params, SolverOptions};
+use crate::potential::{self, BARRIER_ENERGY};
+use crate::shaker::Sinusoid;
+use crate::simulator::{SimError, Simulator};
+
+/// Response class (model.md Sec. 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum ResponseClass {
+    /// Never crosses `x = ½`.
+    Intrawell,
+    /// Crosses only during the transient.
+    TransientInterwell,
+    /// The steady-state orbit itself crosses `x = ½`.
+    ContinuousInterwell,
+}
+
+impl ResponseClass {
+    /// `intrawell`, `transient_interwell` or `continuous_interwell`.
+    pub fn name(self) -> &'static str {
+        match self {
+            ResponseClass::Intrawell => "intrawell",
+            ResponseClass::TransientInterwell => "transient_interwell",
+            ResponseClass::ContinuousInterwell => "continuous_interwell",
+        }
+    }
+}
+
+/// Settings of a classification run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ClassifyOptions {
+    /// Longest run, in natural periods (the paper: 20,000).
+    pub max_natural_periods: f64,
+    /// Always run the full length (the class is then decided on the final sections).
+    pub full_length: bool,
+    /// Largest steady-state period looked for (shaker periods).
+    pub max_period: u32,
+    /// Agreement of section points `p` periods apart, relative to `max(1, |state|)`.
+    pub period_tol: f64,
+    /// Shaker periods used for the Lyapunov exponent of an aperiodic response.
+    pub lyapunov_periods: u32,
+}
+
+impl Default for ClassifyOptions {
+    fn default() -> Self {
+        Self {
+            max_natural_periods: 20_000.0,
+            full_length: false,
+            max_period: 16,
+            period_tol: 1e-8,
+            lyapunov_periods: 2_000,
+        }
+    }
+}
+
+/// The outcome of a classification run.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Classification {
+    /// Response class.
+    pub class: ResponseClass,
+    /// Steady-state period in shaker periods (`None`: aperiodic). At rest counts as period 1.
+    pub period: Option<u32>,
+    /// Aperiodic with a positive largest Lyapunov exponent.
+    pub chaotic: bool,
+    /// Largest Lyapunov exponent (per unit of `τ`) of an aperiodic response.
+    pub lyapunov: Option<f64>,
+    /// Barrier crossings over the whole run.
+    pub snap_throughs: u64,
+    /// Well at the end.
+    pub final_well: Well,
+    /// Converged to rest at the second equilibrium `x = 1`.
+    pub at_rest_in_second_well: bool,
+    /// Impacts per steady-state period (`None`: aperiodic).
+    pub impacts_per_period: Option<u64>,
+    /// Whether the steady state includes sticking.
+    pub sticking: bool,
+    /// Natural periods simulated (`τ/2π`).
+    pub periods_simulated: f64,
+    /// Whether the run stopped before `max_natural_periods`.
+    pub stopped_early: bool,
+}
+
+/// Per-section record.
+#[derive(Clone, Copy)]
+struct Section {
+    y: [f64; 2],
+    impacts: u64,
+    snaps: u64,
+    sticks: u64,
+}
+
+/// Classifies the response at `(Ω, V)` from the paper's initial condition.
+pub fn classify(
+    params: Params,
+    plate: Sinusoid,
+    opts: SolverOptions,
+    co: ClassifyOptions,
+) -> Result<Classification, SimError> {
+    let period_len = plate.period();
+    let max_sections = (co.max_natural_periods * std::f64::consts::TAU / period_len)
+        .ceil()
+        .max(1.0) as u64;
+    let mut sim = Simulator::new(params, plate.into(), opts)?;
+    let keep = (4 * co.max_period + 8) as usize;
+    let mut hist: VecDeque<Section> = VecDeque::with_capacity(keep + 1);
+    let mut sticks = 0u64;
+    let mut decided: Option<(u32, bool)> = None; // (period, at rest)
+    let mut k = 0u64;
+    while k < max_sections {
+        k += 1;
+        sim.advance_instant(plate.section(k), &mut |e: &Event| {
+            sticks += u64::from(matches!(e, Event::StickStart { .. }))
+        })?;
+        let st = sim.state();
+        let stats = sim.stats();
+        hist.push_back(Section {
+            y: [st.x, st.v],
+            impacts: stats.impacts,
+            snaps: stats.snap_throughs,
+            sticks,
+        });
+        if hist.len() > keep {
+            hist.pop_front();
+        }
+        let rest = at_rest_in_well_two(&sim, plate);
+        let found = if rest {
+            Some((1, true))
+        } else {
+            find_period(&hist, co).map(|p| (p, false))
+        };
+        if found.is_some() && !co.full_length {
+            decided = found;
+            break;
+        }
+        if co.full_length {
+            decided = found;
+        }
+    }
+    let stats = sim.stats();
+    let (period, at_rest) = match decided {
+        Some((p, r)) => (Some(p), r),
+        None => (None, false),
+    };
+    // Steady-state window: the confirmation window of the period, or the last sections kept.
+    let window = period.map_or(hist.len(), |p| confirm_len(p) as usize + p as usize);
+    let window = window.min(hist.len());
+    let first = hist[hist.len() - window];
+    let last = hist[hist.len() - 1];
+    let steady_snaps = last.snaps - first.snaps;
+    let class = if steady_snaps > 0 && !at_rest {
+        ResponseClass::ContinuousInterwell
+    } else if stats.snap_throughs > 0 {
+        ResponseClass::TransientInterwell
+    } else {
+        ResponseClass::Intrawell
+    };
+    let per_window = |f: fn(&Section) -> u64| {
+        period.map(|p| {
+            let back = hist[hist.len() - 1 - p as usize];
+            f(&last) - f(&back)
+        })
+    };
+    let impacts_per_period = if at_rest {
+        Some(0)
+    } else {
+        per_window(|s| s.impacts)
+    };
+    let sticking = !at_rest && per_window(|s| s.sticks).is_some_and(|n| n > 0);
+    let lyapunov = match period {
+        Some(_) => None,
+        None => lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?,
+    };
+    Ok(Classification {
+        class,
+        period,
+        chaotic: period.is_none() && lyapunov.is_some_and(|l| l > 1e-3),
+        lyapunov,
+        snap_throughs: stats.snap_throughs,
+        final_well: sim.state().well,
+        at_rest_in_second_well: at_rest,
+        impacts_per_period,
+        sticking,
+        periods_simulated: k as f64 * period_len / std::f64::consts::TAU,
+        stopped_early: k < max_sections,
+    })
+}
+
+fn confirm_len(p: u32) -> u32 {
+    (3 * p).max(8)
+}
+
+/// Largest component difference of section points `lag` apart, relative to `max(1, |state|)`.
+fn lag_distance(hist: &VecDeque<Section>, i: usize, lag: usize) -> f64 {
+    let (a, b) = (hist[i].y, hist[i - lag].y);
+    let scale = a[0].abs().max(a[1].abs()).max(1.0);
+    (a[0] - b[0]).abs().max((a[1] - b[1]).abs()) / scale
+}
+
+/// Smallest `p` whose last `confirm_len(p)` sections repeat with period `p` and keep converging
+/// (or have converged to rounding), unless a proper divisor `d` of `p` is still converging (its
+/// `d`-lag differences shrink over the window): an orbit of period `d` approached through a
+/// multiplier near −1 meets the `2d` test first.
+fn find_period(hist: &VecDeque<Section>, co: ClassifyOptions) -> Option<u32> {
+    let n = hist.len();
+    let p = (1..=co.max_period).find(|&p| {
+        let need = (confirm_len(p) + p) as usize;
+        n >= need
+            && (n - confirm_len(p) as usize..n)
+                .all(|i| lag_distance(hist, i, p as usize) <= co.period_tol)
+    })?;
+    // Compare the same point of the p-cycle a confirmation window apart: on a periodic orbit
+    // these lag distances are equal to rounding; any clear decrease means still converging.
+    let back = (p * confirm_len(p).div_ceil(p)) as usize;
+    if n < back + 2 * p as usize {
+        return None;
+    }
+    let earlier = n - 1 - back;
+    let shrinking = |d: u32| {
+        lag_distance(hist, n - 1, d as usize)
+            < (1.0 - 1e-9) * lag_distance(hist, earlier, d as usize)
+    };
+    // A periodic orbit is approached geometrically (or already reached to rounding); a constant
+    // small drift is a torus near a resonance, not a period.
+    let settled = lag_distance(hist, n - 1, p as usize) <= SETTLED || shrinking(p);
+    let divisor_converging = (1..p).filter(|d| p % d == 0).any(shrinking);
+    (settled && !divisor_converging).then_some(p)
+}
+
+/// Lag distance at which a section sequence counts as repeating to rounding.
+const SETTLED: f64 = 1e-12;
+
+/// In well 2, unable to cross the barrier or to reach the plate ever again (energy only decays
+/// without impacts).
+fn at_rest_in_well_two(sim: &Simulator, plate: Sinusoid) -> bool {
+    let st = sim.state();
+    if st.well != Well::Two || st.mode != crate::ContactMode::Free {
+        return false;
+    }
+    let energy = st.kinetic_energy() + st.potential_energy();
+    if energy >= BARRIER_ENERGY {
+        return false;
+    }
+    // Lowest turning point in well 2: U(x_min) = energy with ½ < x_min ≤ 1 (bisection).
+    let (mut lo, mut hi) = (0.5, 1.0);
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if potential::energy(mid) > energy {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    let (_, _, offset) = plate.origin();
+    let plate_top = offset + plate.velocity() / plate.omega();
+    lo > plate_top
+}
+
+/// Largest Lyapunov exponent (per unit of `τ`) of the response at `(Ω, V)` from the paper's
+/// initial condition: `transient` shaker periods are skipped, then `periods` are averaged.
+/// `None` when the variation vanishes (the steady state sticks, which forgets the initial state).
+pub fn largest_lyapunov(
+    params: Params,
+    plate: Sinusoid,
+    opts: SolverOptions,
+    transient: u32,
+    periods: u32,
+) -> Result<Option<f64>, SimError> {
+    let mut sim = Simulator::new(params, plate.into(), opts)?;
+    sim.advance_to(f64::from(transient) * plate.period(), &mut |_: &Event| {})?;
+    lyapunov_exponent(&mut sim, plate.period(), periods)
+}
+
+/// Largest Lyapunov exponent over `periods` shaker periods from the current state, per unit
+/// of `τ`; `None` when the variation vanishes (sticking forgets the initial state).
+fn lyapunov_exponent(
+    sim: &mut Simulator,
+    period_len: f64,
+    periods: u32,
+) -> Result<Option<f64>, SimError> {
+    sim.enable_variational();
+    let t0 = sim.time();
+    let mut sum = 0.0;
+    for k in 1..=periods {
+        sim.advance_to(t0 + f64::from(k) * period_len, &mut |_: &Event| {})?;
+        match sim.renormalize_variational() {
+            Some(l) => sum += l,
+            None => return Ok(None),
+        }
+    }
+    Ok(Some(sum / (sim.time() - t0)))
+}
