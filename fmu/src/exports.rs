@@ -405,7 +405,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 ) -> fmi2Status {
     call(c, "fmi2GetFMUstate", allowed::ANY, |inst| {
         let slot = out(FMUstate, "FMUstate")?;
-        let snap = inst.snapshot();
+        let snap = inst.snapshot()?;
         store(inst, slot, snap)
     })
 }

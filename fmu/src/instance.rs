@@ -93,10 +93,13 @@ pub struct Instance {
     values: Vec<f64>,
     /// Plate derivatives of order ≥ 1 set for the next step (`fmi2SetRealInputDerivatives`).
     derivatives: PlateInputs,
+    /// Some entry of `derivatives` is set.
+    derivatives_given: bool,
     start_time: f64,
     stop_time: Option<f64>,
     model: Option<Model>,
-    /// Outputs must be recomputed before a read in initialization mode.
+    /// Outputs must be recomputed before they are read (they are computed on demand, so a
+    /// step costs only the integration).
     outputs_stale: bool,
     last_successful_time: f64,
     terminated: bool,
@@ -135,6 +138,7 @@ impl Instance {
             lifecycle: Lifecycle::Instantiated,
             values: start_values(),
             derivatives: [None; MAX_PLATE_ORDER + 1],
+            derivatives_given: false,
             start_time: 0.0,
             stop_time: None,
             model: None,
@@ -251,13 +255,13 @@ impl Instance {
     /// Builds the model at the start time and writes its outputs.
     fn start_model(&mut self) -> Result<Model, String> {
         self.events.clear();
-        let model = Model::start(
+        let mut model = Model::start(
             &self.values,
-            &self.plate_inputs(),
+            &self.derivatives,
             self.start_time,
             &mut self.events,
         )?;
-        model.write_outputs(&mut self.values);
+        model.write_outputs(&mut self.values)?;
         self.outputs_stale = false;
         Ok(model)
     }
@@ -267,7 +271,7 @@ impl Instance {
         let model = self.start_model()?;
         self.model = Some(model);
         self.log_events();
-        self.derivatives = [None; MAX_PLATE_ORDER + 1];
+        self.clear_derivatives();
         self.last_successful_time = self.start_time;
         self.lifecycle = Lifecycle::StepComplete;
         Ok(fmi2OK)
@@ -294,7 +298,7 @@ impl Instance {
     pub fn reset(&mut self) -> Outcome {
         self.lifecycle = Lifecycle::Instantiated;
         self.values = start_values();
-        self.derivatives = [None; MAX_PLATE_ORDER + 1];
+        self.clear_derivatives();
         self.start_time = 0.0;
         self.stop_time = None;
         self.model = None;
@@ -304,17 +308,14 @@ impl Instance {
         Ok(fmi2OK)
     }
 
-    /// Plate inputs for the next step: `z_in`, then `zdot_in` unless a first derivative of
-    /// `z_in` was given, then the higher derivatives.
-    fn plate_inputs(&self) -> PlateInputs {
-        let mut p = self.derivatives;
-        p[0] = Some(self.values[var::z_in]);
-        p[1] = p[1].or(Some(self.values[var::zdot_in]));
-        p
+    /// Forgets the input derivatives (they hold for one step).
+    fn clear_derivatives(&mut self) {
+        self.derivatives = [None; MAX_PLATE_ORDER + 1];
+        self.derivatives_given = false;
     }
 
     /// Index of the variable with value reference `vr` and type `kind`.
-    fn lookup(&self, vr: fmi2ValueReference, kind: Kind) -> Result<usize, String> {
+    fn lookup(vr: fmi2ValueReference, kind: Kind) -> Result<usize, String> {
         let i = VARS
             .iter()
             .position(|v| v.vr == vr)
@@ -329,13 +330,19 @@ impl Instance {
     pub fn get(&mut self, vrs: &[fmi2ValueReference], kind: Kind) -> Result<Vec<f64>, String> {
         let idx = vrs
             .iter()
-            .map(|&vr| self.lookup(vr, kind))
+            .map(|&vr| Self::lookup(vr, kind))
             .collect::<Result<Vec<_>, _>>()?;
         let wants_output = idx.iter().any(|&i| VARS[i].causality == Causality::Output);
-        if wants_output && self.model.is_none() && self.outputs_stale {
-            // Initialization mode: the outputs at the start time from the current values.
-            self.start_model()
-                .map_err(|e| format!("outputs cannot be computed: {e}"))?;
+        if wants_output && self.outputs_stale {
+            match &mut self.model {
+                Some(model) => model.write_outputs(&mut self.values)?,
+                // Initialization mode: the outputs at the start time from the current values.
+                None => {
+                    self.start_model()
+                        .map_err(|e| format!("outputs cannot be computed: {e}"))?;
+                }
+            }
+            self.outputs_stale = false;
         }
         Ok(idx.iter().map(|&i| self.values[i]).collect())
     }
@@ -344,7 +351,7 @@ impl Instance {
     pub fn set(&mut self, vrs: &[fmi2ValueReference], vals: &[f64], kind: Kind) -> Outcome {
         let mut checked = Vec::with_capacity(vrs.len());
         for (&vr, &value) in vrs.iter().zip(vals) {
-            let i = self.lookup(vr, kind)?;
+            let i = Self::lookup(vr, kind)?;
             self.check_settable(i)?;
             checked.push((i, check_range(i, value)?));
         }
@@ -381,7 +388,7 @@ impl Instance {
     ) -> Outcome {
         let mut checked = Vec::with_capacity(vrs.len());
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(vals) {
-            let i = self.lookup(vr, Kind::Real)?;
+            let i = Self::lookup(vr, Kind::Real)?;
             let shift = match i {
                 i if i == var::z_in => 0,
                 i if i == var::zdot_in => 1,
@@ -409,21 +416,23 @@ impl Instance {
         }
         for (k, value) in checked {
             self.derivatives[k] = Some(value);
+            self.derivatives_given = true;
         }
         Ok(fmi2OK)
     }
 
     /// `fmi2GetRealOutputDerivatives` (order 1 of `x`, `v`, `z`, `zdot`).
     pub fn output_derivatives(
-        &self,
+        &mut self,
         vrs: &[fmi2ValueReference],
         orders: &[fmi2Integer],
     ) -> Result<Vec<f64>, String> {
-        let model = self.model.as_ref().ok_or("no model yet")?;
+        let model = self.model.as_mut().ok_or("no model yet")?;
+        model.sync()?;
         vrs.iter()
             .zip(orders)
             .map(|(&vr, &order)| {
-                let i = self.lookup(vr, Kind::Real)?;
+                let i = Self::lookup(vr, Kind::Real)?;
                 if order != 1 {
                     return Err(format!(
                         "derivative order {order} of {}: only order 1 is provided",
@@ -439,46 +448,43 @@ impl Instance {
 
     /// `fmi2DoStep`: integrates from the current time to exactly `tc + h`.
     pub fn do_step(&mut self, tc: f64, h: f64) -> Outcome {
-        let now = self
-            .model
-            .as_ref()
-            .ok_or("no model (internal state lost)")?
-            .time;
-        if !(h.is_finite() && h > 0.0) {
-            return Err(format!(
-                "communicationStepSize = {h} s must be finite and > 0"
-            ));
-        }
-        if !tc.is_finite() || (tc - now).abs() > 1e-9 * now.abs().max(1.0) {
-            return Err(format!(
-                "currentCommunicationPoint = {tc} s does not match the FMU's time {now} s"
-            ));
-        }
-        let t_end = tc + h;
-        if t_end <= now {
-            return Err(format!(
-                "the step ends at {t_end} s, not after the FMU's time {now} s"
-            ));
-        }
-        if let Some(stop) = self.stop_time {
-            if t_end > stop + 1e-9 * stop.abs().max(1.0) {
-                return Err(format!(
-                    "the step ends at {t_end} s, beyond stopTime = {stop} s"
-                ));
-            }
-        }
-        let inputs = self.plate_inputs();
-        self.events.clear();
         let Some(model) = self.model.as_mut() else {
-            return Err("no model".into());
+            return Err("no model (internal state lost)".into());
         };
-        let result = model.step(t_end, &self.values, &inputs, &mut self.events);
-        model.write_outputs(&mut self.values);
-        let reached = model.time;
+        let now = model.time;
+        let t_end = tc + h;
+        let slack = |t: f64| 1e-9 * t.abs().max(1.0);
+        let valid = h.is_finite()
+            && h > 0.0
+            && (tc - now).abs() <= slack(now)
+            && t_end > now
+            && self
+                .stop_time
+                .is_none_or(|stop| t_end <= stop + slack(stop));
+        if !valid {
+            return Err(step_refusal(tc, h, now, self.stop_time));
+        }
+        let result = model.step(t_end, &self.values, &self.derivatives, &mut self.events);
+        self.outputs_stale = true;
+        if result.is_ok() && self.events.is_empty() {
+            // The common case, kept short.
+            if self.derivatives_given {
+                self.clear_derivatives();
+            }
+            self.last_successful_time = t_end;
+            return Ok(fmi2OK);
+        }
+        self.finish_step(result, t_end)
+    }
+
+    /// The rest of `do_step` after events or a failure.
+    #[inline(never)]
+    fn finish_step(&mut self, result: Result<(), StepFailure>, t_end: f64) -> Outcome {
+        let reached = self.model.as_ref().map_or(t_end, |m| m.time);
         self.log_events();
         match result {
             Ok(()) => {
-                self.derivatives = [None; MAX_PLATE_ORDER + 1];
+                self.clear_derivatives();
                 self.last_successful_time = t_end;
                 Ok(fmi2OK)
             }
@@ -526,8 +532,9 @@ impl Instance {
     }
 
     /// A pointer-free copy of the whole instance state.
-    pub fn snapshot(&self) -> Snapshot {
-        Snapshot {
+    pub fn snapshot(&mut self) -> Result<Snapshot, String> {
+        let model = self.model.as_mut().map(Model::save).transpose()?;
+        Ok(Snapshot {
             lifecycle: self.lifecycle,
             values: self.values.clone(),
             inputs: self.derivatives,
@@ -535,8 +542,8 @@ impl Instance {
             stop_time: self.stop_time,
             last_successful_time: self.last_successful_time,
             terminated: self.terminated,
-            model: self.model.as_ref().map(Model::save),
-        }
+            model,
+        })
     }
 
     /// Checks a snapshot fully and returns the model it holds.
@@ -575,11 +582,12 @@ impl Instance {
         self.lifecycle = s.lifecycle;
         self.values.clone_from(&s.values);
         self.derivatives = s.inputs;
+        self.derivatives_given = s.inputs.iter().any(Option::is_some);
         self.start_time = s.start_time;
         self.stop_time = s.stop_time;
         self.last_successful_time = s.last_successful_time;
         self.terminated = s.terminated;
-        self.outputs_stale = model.is_none();
+        self.outputs_stale = true;
         self.model = model;
         Ok(fmi2OK)
     }
@@ -612,6 +620,24 @@ impl Instance {
         // SAFETY: registered, so it came from `Box::into_raw` and is freed once.
         drop(unsafe { Box::from_raw(h.cast::<Snapshot>()) });
         Ok(fmi2OK)
+    }
+}
+
+/// Why `fmi2DoStep(tc, h)` is refused at the FMU time `now` (s).
+#[cold]
+fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>) -> String {
+    let t_end = tc + h;
+    if !(h.is_finite() && h > 0.0) {
+        format!("communicationStepSize = {h} s must be finite and > 0")
+    } else if !tc.is_finite() || (tc - now).abs() > 1e-9 * now.abs().max(1.0) {
+        format!("currentCommunicationPoint = {tc} s does not match the FMU's time {now} s")
+    } else if t_end <= now {
+        format!("the step ends at {t_end} s, not after the FMU's time {now} s")
+    } else {
+        format!(
+            "the step ends at {t_end} s, beyond stopTime = {} s",
+            stop.unwrap_or(f64::NAN)
+        )
     }
 }
 

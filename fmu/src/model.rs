@@ -5,9 +5,11 @@
 //! `delta_x = 1` and `mass = 1` every conversion is a multiplication by 1: the FMU is the
 //! nondimensional model bit for bit.
 
+use std::ops::ControlFlow;
+
 use bistable_core::{
-    potential, ChatterRule, Checkpoint, ContactMode, Event, Instant, ParamError, Params,
-    PlateMotion, PolyPiece, SimError, Simulator, Sinusoid, SolverOptions,
+    potential, ChatterRule, Checkpoint, ContactMode, Event, Instant, Observer, ParamError, Params,
+    PlateMotion, PolyPiece, SimError, Simulator, Sinusoid, SolverOptions, StepView,
 };
 
 use crate::md::var;
@@ -104,6 +106,15 @@ impl Scale {
 /// Plate derivatives for the next step (SI, order 0..=5); `None`: not given (zero above order 1).
 pub type PlateInputs = [Option<f64>; MAX_PLATE_ORDER + 1];
 
+/// The plate derivatives from the inputs: `z_in`, then `zdot_in` unless a first derivative of
+/// `z_in` was given (`derivatives`, from `fmi2SetRealInputDerivatives`), then the higher ones.
+fn plate_inputs(values: &[f64], derivatives: &PlateInputs) -> PlateInputs {
+    let mut p = *derivatives;
+    p[0] = Some(values[var::z_in]);
+    p[1] = p[1].or(Some(values[var::zdot_in]));
+    p
+}
+
 /// A running simulation in SI units.
 #[derive(Clone)]
 pub struct Model {
@@ -119,6 +130,32 @@ pub struct Model {
     pub applied: (f64, f64),
     /// Communication time (s): where the last step ended.
     pub time: f64,
+    /// `τ` of the communication time when the core has not been advanced there yet: a step
+    /// that ends inside the core's current Taylor step only records its end (no event can lie
+    /// before the Taylor step's end); [`Model::sync`] advances the core when a result is needed.
+    pending: Option<f64>,
+    /// A lower bound on the end (`τ`) of the core's current Taylor step (`-inf`: unknown).
+    taylor_end: f64,
+}
+
+/// Collects the events of an advance and the end of the last Taylor step computed.
+struct Collect<'a> {
+    events: &'a mut Vec<Event>,
+    taylor_end: &'a mut f64,
+}
+
+impl Observer for Collect<'_> {
+    fn event(&mut self, e: &Event) -> ControlFlow<()> {
+        self.events.push(*e);
+        ControlFlow::Continue(())
+    }
+
+    fn step(&mut self, step: &StepView<'_>) {
+        // Rounded end, lowered by a few ulps so that "target < taylor_end" implies the core
+        // would find the target inside this step.
+        let end = step.t0() + step.len();
+        *self.taylor_end = end - 8.0 * f64::EPSILON * end.abs();
+    }
 }
 
 /// Why a step stopped short.
@@ -166,7 +203,7 @@ impl Model {
     /// `events`.
     pub fn start(
         values: &[f64],
-        inputs: &PlateInputs,
+        derivatives: &PlateInputs,
         t_start: f64,
         events: &mut Vec<Event>,
     ) -> Result<Self, String> {
@@ -189,7 +226,10 @@ impl Model {
         let plate: PlateMotion = match mode {
             ShakerMode::Internal => phase_ref.into(),
             // Only its start matters: every step replaces it with a piece over the step.
-            ShakerMode::External => plate_piece(&scale, origin, tau0 + 1.0, inputs, None)?.into(),
+            ShakerMode::External => {
+                let inputs = plate_inputs(values, derivatives);
+                plate_piece(&scale, origin, tau0 + 1.0, &inputs, None)?.into()
+            }
         };
         let x0 = values[var::x0] / scale.dx;
         let v0 = values[var::v0] / (scale.omega0 * scale.dx);
@@ -201,7 +241,12 @@ impl Model {
             ),
             other => describe(&other, &scale),
         })?;
-        sim.advance_to(tau0, &mut |e: &Event| events.push(*e))
+        let mut taylor_end = f64::NEG_INFINITY;
+        let mut obs = Collect {
+            events,
+            taylor_end: &mut taylor_end,
+        };
+        sim.advance_to(tau0, &mut obs)
             .map_err(|e| describe(&e, &scale))?;
         Ok(Self {
             sim,
@@ -210,6 +255,8 @@ impl Model {
             phase_ref,
             applied: (omega, v),
             time: t_start,
+            pending: None,
+            taylor_end,
         })
     }
 
@@ -235,14 +282,28 @@ impl Model {
             phase_ref,
             applied: saved.applied,
             time: saved.time,
+            pending: None,
+            taylor_end: f64::NEG_INFINITY,
         })
     }
 
+    /// Advances the core to the communication time if a step left it behind (see `pending`).
+    pub fn sync(&mut self) -> Result<(), String> {
+        if let Some(tau) = self.pending.take() {
+            let mut ignore = |_: &Event| {};
+            self.sim
+                .advance_to(tau, &mut ignore)
+                .map_err(|e| describe(&e, &self.scale))?;
+        }
+        Ok(())
+    }
+
     /// The parts to save (pointer-free).
-    pub fn save(&self) -> SavedModel {
+    pub fn save(&mut self) -> Result<SavedModel, String> {
+        self.sync()?;
         let (origin, phase0, offset) = self.phase_ref.origin();
         let (hi, lo) = origin.parts();
-        SavedModel {
+        Ok(SavedModel {
             checkpoint: self.sim.checkpoint(),
             phase_ref: (
                 self.phase_ref.omega(),
@@ -254,23 +315,46 @@ impl Model {
             ),
             applied: self.applied,
             time: self.time,
-        }
+        })
     }
 
     /// Integrates from the current time to exactly `t_end` (s), continuing the trajectory (no
     /// restart) unless the plate changes: a tunable `Omega`/`V` change, or, in external mode, the
     /// piece built from the inputs. Events go to `events`.
+    #[inline]
     pub fn step(
         &mut self,
         t_end: f64,
         values: &[f64],
-        inputs: &PlateInputs,
+        derivatives: &PlateInputs,
         events: &mut Vec<Event>,
     ) -> Result<(), StepFailure> {
         let tau_end = self.scale.tau(t_end);
+        let wanted = (values[var::Omega], values[var::V]);
+        let same_plate = self.mode == ShakerMode::Internal && wanted == self.applied;
+        if same_plate && tau_end < self.taylor_end {
+            self.pending = Some(tau_end);
+            self.time = t_end;
+            return Ok(());
+        }
+        self.step_core(t_end, values, derivatives, events)
+    }
+
+    /// The part of [`Model::step`] that runs the core.
+    #[inline(never)]
+    fn step_core(
+        &mut self,
+        t_end: f64,
+        values: &[f64],
+        derivatives: &PlateInputs,
+        events: &mut Vec<Event>,
+    ) -> Result<(), StepFailure> {
+        let tau_end = self.scale.tau(t_end);
+        let wanted = (values[var::Omega], values[var::V]);
+        let same_plate = self.mode == ShakerMode::Internal && wanted == self.applied;
+        self.sync().map_err(StepFailure::Refused)?;
         let now = self.sim.instant();
         let refuse = |e: &SimError, s: &Scale| StepFailure::Refused(describe(e, s));
-        let wanted = (values[var::Omega], values[var::V]);
         if wanted != self.applied {
             let (omega, v) = wanted;
             self.phase_ref = PlateMotion::from(self.phase_ref)
@@ -285,15 +369,21 @@ impl Model {
         }
         if self.mode == ShakerMode::External {
             let z_now = self.sim.state().z;
-            let piece = plate_piece(&self.scale, now, tau_end, inputs, Some(z_now))
+            let inputs = plate_inputs(values, derivatives);
+            let piece = plate_piece(&self.scale, now, tau_end, &inputs, Some(z_now))
                 .map_err(StepFailure::Refused)?;
             self.sim
                 .set_plate(piece.into())
                 .map_err(|e| refuse(&e, &self.scale))?;
         }
-        let result = self
-            .sim
-            .advance_to(tau_end, &mut |e: &Event| events.push(*e));
+        if !same_plate {
+            self.taylor_end = f64::NEG_INFINITY;
+        }
+        let mut obs = Collect {
+            events,
+            taylor_end: &mut self.taylor_end,
+        };
+        let result = self.sim.advance_to(tau_end, &mut obs);
         match result {
             Ok(()) => {
                 self.time = t_end;
@@ -313,7 +403,8 @@ impl Model {
     }
 
     /// Writes every output variable into `values`.
-    pub fn write_outputs(&self, values: &mut [f64]) {
+    pub fn write_outputs(&mut self, values: &mut [f64]) -> Result<(), String> {
+        self.sync()?;
         let s = &self.scale;
         let st = self.sim.state();
         let stats = self.sim.stats();
@@ -343,9 +434,11 @@ impl Model {
         values[var::last_impact_v_before] = vb;
         values[var::last_impact_v_after] = va;
         values[var::last_impact_delta_k] = dk;
+        Ok(())
     }
 
-    /// First time derivative (SI) of the output `index`, for `x`, `v`, `z`, `zdot`.
+    /// First time derivative (SI) of the output `index`, for `x`, `v`, `z`, `zdot` (after
+    /// [`Model::sync`]).
     pub fn output_derivative(&self, index: usize) -> Option<f64> {
         let s = &self.scale;
         let st = self.sim.state();
@@ -444,4 +537,65 @@ fn plate_piece(
         ));
     }
     PolyPiece::new(start, Instant::new(end), &c).map_err(|e| describe_param(&e))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::md::{Causality, VARS};
+
+    fn defaults() -> Vec<f64> {
+        VARS.iter().map(|v| v.start).collect()
+    }
+
+    #[test]
+    fn every_output_is_written() {
+        let mut values = defaults();
+        let mut events = Vec::new();
+        let none = [None; MAX_PLATE_ORDER + 1];
+        let mut m = Model::start(&values, &none, 0.0, &mut events).unwrap();
+        m.step(3.0, &values, &none, &mut events).ok().unwrap();
+        let outputs: Vec<usize> = (0..VARS.len())
+            .filter(|&i| VARS[i].causality == Causality::Output)
+            .collect();
+        outputs.iter().for_each(|&i| values[i] = f64::NAN);
+        m.write_outputs(&mut values).unwrap();
+        for i in outputs {
+            assert!(values[i].is_finite(), "{} not written", VARS[i].name);
+        }
+    }
+
+    #[test]
+    fn plate_blend_starts_at_the_plate_and_ends_on_the_inputs() {
+        let scale = Scale {
+            omega0: 2.0,
+            dx: 0.5,
+            mass: 1.0,
+        };
+        let inputs = [Some(0.1), Some(0.2), Some(-0.4), None, None, None];
+        let start = Instant::new(1.0);
+        let piece = plate_piece(&scale, start, 1.5, &inputs, Some(0.25)).unwrap();
+        let p = PlateMotion::from(piece);
+        // Starts where the plate was (nondimensional 0.25), with the input velocity.
+        let (z0, zd0, _) = p.motion(start);
+        assert!((z0 - 0.25).abs() < 1e-15);
+        assert!((zd0 - 0.2 / (0.5 * 2.0)).abs() < 1e-15);
+        // Ends on the inputs' Taylor polynomial: z = (0.1 + 0.2 s − 0.2 s²)/Δx, s = 0.25 s.
+        let s = 0.25;
+        let (z1, _, _) = p.motion(Instant::new(1.5));
+        assert!(
+            (z1 - (0.1 + 0.2 * s - 0.2 * s * s) / 0.5).abs() < 1e-14,
+            "{z1}"
+        );
+        // Without a plate position (initialization) it starts on the inputs.
+        let first = plate_piece(&scale, start, 1.5, &inputs, None).unwrap();
+        assert!((PlateMotion::from(first).motion(start).0 - 0.2).abs() < 1e-15);
+        assert!(plate_piece(&scale, start, 0.5, &inputs, None).is_err());
+    }
+
+    #[test]
+    fn core_parameter_errors_use_the_fmu_names() {
+        let e = Params::new(0.1, 7.0).unwrap_err();
+        assert!(describe_param(&e).starts_with("invalid e = 7"));
+    }
 }

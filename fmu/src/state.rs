@@ -403,3 +403,85 @@ fn get_checkpoint(r: &mut Reader) -> Res<Checkpoint> {
         })?,
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::md::{var, VARS};
+    use crate::model::Model;
+
+    /// Snapshots of models in both shaker modes, one riding a chatter tail or stuck.
+    fn samples() -> Vec<Snapshot> {
+        let mut out = Vec::new();
+        for (mode, omega, v, t_end) in [(1.0, 0.3, 0.05, 30.0), (2.0, 1.75, 0.07, 3.0)] {
+            let mut values: Vec<f64> = VARS.iter().map(|x| x.start).collect();
+            values[var::shaker_mode] = mode;
+            (values[var::Omega], values[var::V]) = (omega, v);
+            values[var::zdot_in] = 0.07;
+            let inputs = [None, None, Some(-0.1), None, None, Some(1e-3)];
+            let mut events = Vec::new();
+            let mut m = Model::start(&values, &inputs, 0.0, &mut events).unwrap();
+            m.step(t_end, &values, &inputs, &mut events).ok().unwrap();
+            out.push(Snapshot {
+                lifecycle: Lifecycle::StepComplete,
+                values,
+                inputs,
+                start_time: 0.0,
+                stop_time: Some(100.0),
+                last_successful_time: t_end,
+                terminated: false,
+                model: Some(m.save().unwrap()),
+            });
+        }
+        out
+    }
+
+    #[test]
+    fn round_trip_is_exact_for_both_plate_kinds() {
+        let snaps = samples();
+        let kinds: Vec<_> = snaps
+            .iter()
+            .map(|s| matches!(s.model.unwrap().checkpoint.plate, PlateRecord::Poly { .. }))
+            .collect();
+        assert_eq!(kinds, [false, true]);
+        for s in snaps {
+            let bytes = s.serialize();
+            assert_eq!(&bytes[..8], MAGIC);
+            assert_eq!(Snapshot::deserialize(&bytes).unwrap(), s);
+        }
+    }
+
+    #[test]
+    fn every_truncation_and_single_bit_flip_is_refused() {
+        let bytes = samples()[0].serialize();
+        for n in 0..bytes.len() {
+            assert!(Snapshot::deserialize(&bytes[..n]).is_err(), "length {n}");
+        }
+        for i in 0..bytes.len() {
+            let mut bad = bytes.clone();
+            bad[i] ^= 1 << (i % 8);
+            assert!(Snapshot::deserialize(&bad).is_err(), "flip at {i}");
+        }
+        let mut longer = bytes.clone();
+        longer.push(0);
+        assert!(Snapshot::deserialize(&longer)
+            .unwrap_err()
+            .contains("declares"));
+    }
+
+    #[test]
+    fn a_well_formed_state_with_bad_values_is_refused_by_validation() {
+        let mut s = samples()[0].clone();
+        s.values[var::e] = 2.0;
+        let bytes = s.serialize();
+        let back = Snapshot::deserialize(&bytes).unwrap();
+        let err = crate::instance::Instance::validate(&back).err().unwrap();
+        assert!(err.contains("e = 2"), "{err}");
+        let mut s = samples()[1].clone();
+        if let Some(m) = s.model.as_mut() {
+            m.checkpoint.u0 = -1.0;
+        }
+        let err = crate::instance::Instance::validate(&s).err().unwrap();
+        assert!(err.contains("u0"), "{err}");
+    }
+}

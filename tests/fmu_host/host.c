@@ -1,0 +1,429 @@
+/* A small FMI 2.0 co-simulation host for the bistable_impact FMU, compiled against the
+ * cbindgen-generated header (fmu/include/bistable_impact.h) and loading the binary with dlopen.
+ *
+ *   host test  LIB.so modelDescription.xml   scenarios + scripted illegal calls; prints
+ *                                            "N passed, M failed" and exits 1 on any failure
+ *   host bench LIB.so modelDescription.xml   cost per fmi2DoStep, h = 0.01 vs one big step
+ *
+ * Value references are looked up by name in modelDescription.xml (the single source of truth).
+ */
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bistable_impact.h"
+
+/* ---- the FMU's functions, typed by the header's prototypes ---- */
+#define FMI_FUNCTIONS(X)                                                                      \
+    X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2Instantiate)      \
+    X(fmi2FreeInstance) X(fmi2SetupExperiment) X(fmi2EnterInitializationMode)                \
+    X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset) X(fmi2GetReal)               \
+    X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger)    \
+    X(fmi2SetBoolean) X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2SetFMUstate)                 \
+    X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize) X(fmi2SerializeFMUstate)               \
+    X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative)                               \
+    X(fmi2SetRealInputDerivatives) X(fmi2GetRealOutputDerivatives) X(fmi2DoStep)             \
+    X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus) X(fmi2GetIntegerStatus)          \
+    X(fmi2GetBooleanStatus) X(fmi2GetStringStatus)
+
+static struct {
+#define FIELD(f) __typeof__(&f) f;
+    FMI_FUNCTIONS(FIELD)
+#undef FIELD
+} F;
+
+static int load(const char *path) {
+    void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
+    if (!lib) {
+        fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
+        return -1;
+    }
+    int missing = 0, count = 0;
+#define LOAD(f)                                                      \
+    F.f = (__typeof__(&f))dlsym(lib, #f);                            \
+    if (!F.f) {                                                      \
+        fprintf(stderr, "missing export %s\n", #f);                  \
+        missing++;                                                   \
+    }                                                                \
+    count++;
+    FMI_FUNCTIONS(LOAD)
+#undef LOAD
+    printf("loaded %d of %d fmi2 functions\n", count - missing, count);
+    return missing ? -1 : 0;
+}
+
+/* ---- model description: guid and value references by name ---- */
+static char *xml;
+
+static char *read_file(const char *path) {
+    FILE *f = fopen(path, "rb");
+    if (!f) return NULL;
+    fseek(f, 0, SEEK_END);
+    long n = ftell(f);
+    fseek(f, 0, SEEK_SET);
+    char *s = malloc((size_t)n + 1);
+    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) n = 0;
+    if (s) s[n] = 0;
+    fclose(f);
+    return s;
+}
+
+/* The value reference of the variable `name` (exits if absent). */
+static fmi2ValueReference vr(const char *name) {
+    char key[128];
+    snprintf(key, sizeof key, "name=\"%s\"", name);
+    const char *p = strstr(xml, key);
+    const char *q = p ? strstr(p, "valueReference=\"") : NULL;
+    if (!q) {
+        fprintf(stderr, "variable %s not in modelDescription.xml\n", name);
+        exit(2);
+    }
+    return (fmi2ValueReference)strtoul(q + strlen("valueReference=\""), NULL, 10);
+}
+
+static char guid[64];
+
+static void read_guid(void) {
+    const char *p = strstr(xml, "guid=\"");
+    if (p) sscanf(p + 6, "%63[^\"]", guid);
+}
+
+/* ---- logger: a real variadic function; keeps the last message ---- */
+static char last_msg[2048];
+static fmi2Status last_status = -1;
+static int n_events;
+
+static void logger(fmi2ComponentEnvironment env, fmi2String name, fmi2Status status,
+                   fmi2String category, fmi2String format, ...) {
+    (void)env;
+    (void)name;
+    va_list ap;
+    va_start(ap, format);
+    vsnprintf(last_msg, sizeof last_msg, format, ap);
+    va_end(ap);
+    last_status = status;
+    if (strcmp(category, "logEvents") == 0) n_events++;
+    if (getenv("HOST_VERBOSE")) printf("  [%d %s] %s\n", status, category, last_msg);
+}
+
+static fmi2CallbackFunctions callbacks = {logger, NULL, NULL, NULL, NULL};
+
+/* ---- checks ---- */
+static int passed, failed;
+
+static void check(int ok, const char *what) {
+    if (ok) {
+        passed++;
+    } else {
+        failed++;
+        printf("FAIL: %s (last log: %s)\n", what, last_msg);
+    }
+}
+
+/* An expected refusal: fmi2Error and a logged message containing `needle`. */
+static void refused(fmi2Status s, const char *needle, const char *what) {
+    char buf[512];
+    snprintf(buf, sizeof buf, "%s: refused with a message about \"%s\"", what, needle);
+    check(s == fmi2Error && last_status == fmi2Error && strstr(last_msg, needle) != NULL, buf);
+    last_msg[0] = 0;
+    last_status = -1;
+}
+
+static fmi2Component instantiate(int logging) {
+    return F.fmi2Instantiate("host", fmi2CoSimulation, guid, NULL, &callbacks, fmi2False,
+                             logging);
+}
+
+/* Instantiated, parameters set, initialized at t = 0 (stop time `stop` if > 0). */
+static fmi2Component started(double omega, double v, double stop) {
+    fmi2Component c = instantiate(fmi2False);
+    if (!c) return NULL;
+    fmi2ValueReference vrs[2] = {vr("Omega"), vr("V")};
+    fmi2Real vals[2] = {omega, v};
+    int ok = F.fmi2SetupExperiment(c, fmi2False, 0, 0.0, stop > 0, stop) == fmi2OK &&
+             F.fmi2SetReal(c, vrs, 2, vals) == fmi2OK &&
+             F.fmi2EnterInitializationMode(c) == fmi2OK &&
+             F.fmi2ExitInitializationMode(c) == fmi2OK;
+    if (!ok) {
+        F.fmi2FreeInstance(c);
+        return NULL;
+    }
+    return c;
+}
+
+static double real(fmi2Component c, const char *name) {
+    fmi2ValueReference r = vr(name);
+    fmi2Real x = NAN;
+    F.fmi2GetReal(c, &r, 1, &x);
+    return x;
+}
+
+static int integer(fmi2Component c, const char *name) {
+    fmi2ValueReference r = vr(name);
+    fmi2Integer x = -1;
+    F.fmi2GetInteger(c, &r, 1, &x);
+    return x;
+}
+
+/* Steps of size h from t0 to t_end (last one shortened), reading x and v after each step when
+ * `read`; returns 0 if every step was OK. */
+static int run_reading(fmi2Component c, double t0, double t_end, double h, int read) {
+    long n = (long)ceil((t_end - t0) / h - 1e-9);
+    double t = t0;
+    fmi2ValueReference xv[2] = {vr("x"), vr("v")};
+    fmi2Real out[2];
+    for (long k = 1; k <= n; k++) {
+        double next = k == n ? t_end : t0 + (double)k * h;
+        if (F.fmi2DoStep(c, t, next - t, fmi2True) != fmi2OK) return -1;
+        if (read && F.fmi2GetReal(c, xv, 2, out) != fmi2OK) return -1;
+        t = next;
+    }
+    return 0;
+}
+
+static int run(fmi2Component c, double t0, double t_end, double h) {
+    return run_reading(c, t0, t_end, h, 0);
+}
+
+/* ---- scenarios ---- */
+
+static void step_size_independence(void) {
+    const double hs[] = {1e-3, 0.01, 0.1, 1.0, 10.0};
+    double x0 = 0, v0 = 0, t0 = 0;
+    int n0 = 0;
+    for (int i = 0; i < 5; i++) {
+        fmi2Component c = started(1.75, 0.07, 0);
+        check(c != NULL, "instantiate and initialize the baseline");
+        if (!c) return;
+        check(run(c, 0, 200, hs[i]) == 0, "baseline steps are all fmi2OK");
+        double x = real(c, "x"), v = real(c, "v"), t = real(c, "last_impact_time");
+        int n = integer(c, "impact_count");
+        if (i == 0) {
+            x0 = x, v0 = v, t0 = t, n0 = n;
+            check(n > 50, "baseline has impacts");
+        } else {
+            char what[128];
+            snprintf(what, sizeof what, "h = %g agrees with h = 1e-3 to 1e-12 (x, v, impacts)", hs[i]);
+            check(fabs(x - x0) <= 1e-12 && fabs(v - v0) <= 1e-12 && fabs(t - t0) <= 1e-12 && n == n0,
+                  what);
+        }
+        F.fmi2Terminate(c);
+        F.fmi2FreeInstance(c);
+    }
+}
+
+static void fmu_state_across_instances(void) {
+    fmi2Component a = started(0.3, 0.05, 0), b = started(1.0, 0.01, 0);
+    check(a && b, "two instances");
+    if (!a || !b) return;
+    run(a, 0, 15, 0.25);
+    fmi2FMUstate s = NULL, t = NULL;
+    check(F.fmi2GetFMUstate(a, &s) == fmi2OK && s, "fmi2GetFMUstate");
+    size_t size = 0;
+    check(F.fmi2SerializedFMUstateSize(a, s, &size) == fmi2OK && size > 100, "state size");
+    fmi2Byte *bytes = malloc(size);
+    check(F.fmi2SerializeFMUstate(a, s, bytes, size) == fmi2OK, "serialize");
+    run(a, 15, 40, 0.25);
+    double xa = real(a, "x"), va = real(a, "v");
+    int na = integer(a, "impact_count");
+    check(F.fmi2DeSerializeFMUstate(b, bytes, size, &t) == fmi2OK && t, "deserialize in another instance");
+    check(F.fmi2SetFMUstate(b, t) == fmi2OK, "set the deserialized state");
+    run(b, 15, 40, 0.25);
+    check(real(b, "x") == xa && real(b, "v") == va && integer(b, "impact_count") == na,
+          "restored instance continues bit for bit");
+    check(F.fmi2SetFMUstate(a, s) == fmi2OK, "roll back");
+    run(a, 15, 40, 0.25);
+    check(real(a, "x") == xa && real(a, "v") == va, "rollback reproduces the steps bit for bit");
+    bytes[size / 2] ^= 1;
+    fmi2FMUstate u = NULL;
+    refused(F.fmi2DeSerializeFMUstate(b, bytes, size, &u), "checksum", "corrupt state bytes");
+    refused(F.fmi2DeSerializeFMUstate(b, bytes, size - 8, &u), "bytes", "truncated state bytes");
+    refused(F.fmi2DeSerializeFMUstate(b, bytes, 3, &u), "truncated", "three state bytes");
+    check(u == NULL, "no state from bad bytes");
+    check(F.fmi2FreeFMUstate(a, &s) == fmi2OK && s == NULL, "free state");
+    check(F.fmi2FreeFMUstate(b, &t) == fmi2OK, "free deserialized state");
+    free(bytes);
+    F.fmi2FreeInstance(a);
+    F.fmi2FreeInstance(b);
+}
+
+static void logging_of_events(void) {
+    fmi2Component c = instantiate(fmi2True);
+    check(c != NULL, "instantiate with logging");
+    if (!c) return;
+    const char *cat = "logEvents";
+    check(F.fmi2SetDebugLogging(c, fmi2True, 1, &cat) == fmi2OK, "enable logEvents");
+    F.fmi2SetupExperiment(c, fmi2False, 0, 0, fmi2False, 0);
+    F.fmi2EnterInitializationMode(c);
+    F.fmi2ExitInitializationMode(c);
+    n_events = 0;
+    run(c, 0, 50, 50);
+    int n = integer(c, "impact_count");
+    check(n_events >= n - 1 && n > 5, "every impact inside one big step is logged under logEvents");
+    check(strstr(last_msg, "impact") != NULL || strstr(last_msg, "snap") != NULL ||
+              strstr(last_msg, "stick") != NULL,
+          "event messages arrive through the variadic logger");
+    F.fmi2FreeInstance(c);
+}
+
+/* The scripted sequence of illegal calls and bad values. */
+static void illegal_calls(void) {
+    fmi2Component none = NULL;
+    int bogus = 42;
+    check(F.fmi2Instantiate("x", fmi2CoSimulation, "{wrong}", NULL, &callbacks, 0, 0) == NULL &&
+              strstr(last_msg, "does not match") != NULL,
+          "wrong GUID refused with a logged reason");
+    check(F.fmi2Instantiate("x", fmi2ModelExchange, guid, NULL, &callbacks, 0, 0) == NULL &&
+              strstr(last_msg, "co-simulation only") != NULL,
+          "model exchange refused");
+    check(F.fmi2Instantiate("x", fmi2CoSimulation, guid, NULL, NULL, 0, 0) == NULL,
+          "NULL callbacks refused");
+    check(F.fmi2Instantiate(NULL, fmi2CoSimulation, guid, NULL, &callbacks, 0, 0) == NULL,
+          "NULL instance name refused");
+    check(F.fmi2Instantiate("x", fmi2CoSimulation, NULL, NULL, &callbacks, 0, 0) == NULL,
+          "NULL GUID refused");
+
+    fmi2Component c = instantiate(fmi2False);
+    check(c != NULL, "instantiate");
+    if (!c) return;
+    fmi2ValueReference zeta = vr("zeta"), e = vr("e"), x = vr("x"), z_in = vr("z_in");
+    fmi2ValueReference mode = vr("shaker_mode"), unknown = 777;
+    fmi2Real nan = NAN, two = 2.0, one = 1.0, out = 0;
+    fmi2Integer three = 3, order = 9;
+    fmi2Boolean b = 0;
+    refused(F.fmi2DoStep(c, 0, 0.1, 0), "not allowed in state Instantiated", "step before initialization");
+    refused(F.fmi2GetReal(c, &x, 1, &out), "not allowed", "get before initialization");
+    refused(F.fmi2ExitInitializationMode(c), "not allowed", "exit before enter");
+    refused(F.fmi2SetReal(c, &zeta, 1, &nan), "zeta = NaN", "NaN parameter");
+    refused(F.fmi2SetReal(c, &e, 1, &two), "e = 2 is out of range", "out-of-range e");
+    refused(F.fmi2SetInteger(c, &mode, 1, &three), "shaker_mode = 3", "unknown shaker mode");
+    refused(F.fmi2SetReal(c, &unknown, 1, &one), "unknown value reference 777", "unknown vr");
+    refused(F.fmi2SetReal(c, NULL, 1, &one), "vr is NULL", "NULL vr array");
+    refused(F.fmi2SetReal(c, &zeta, 1, NULL), "value is NULL", "NULL value array");
+    refused(F.fmi2SetReal(c, &x, 1, &one), "is an output", "setting an output");
+    refused(F.fmi2SetBoolean(c, &zeta, 1, &b), "not Boolean", "wrong type");
+    refused(F.fmi2SetString(c, &zeta, 1, (const fmi2String[]){"a"}), "not String", "no strings");
+    refused(F.fmi2SetupExperiment(c, 0, 0, NAN, 0, 0), "startTime", "NaN start time");
+    refused(F.fmi2SetupExperiment(c, 0, 0, 5, 1, 1), "stopTime", "stop before start");
+    refused(F.fmi2SetRealInputDerivatives(c, &z_in, 1, &order, &one), "order 9", "derivative order");
+    refused(F.fmi2SetRealInputDerivatives(c, &zeta, 1, &(fmi2Integer){1}, &one), "only z_in",
+            "derivative of a parameter");
+    refused(F.fmi2SetDebugLogging(c, 1, 1, (const fmi2String[]){"logNothing"}), "unknown log category",
+            "unknown category");
+    refused(F.fmi2SetDebugLogging(c, 1, 1, NULL), "categories is NULL", "NULL categories");
+    fmi2FMUstate fake = &bogus;
+    refused(F.fmi2SetFMUstate(c, fake), "not created by this instance", "foreign FMU state pointer");
+    refused(F.fmi2FreeFMUstate(c, NULL), "FMUstate is NULL", "NULL state slot");
+    refused(F.fmi2GetFMUstate(c, NULL), "FMUstate is NULL", "NULL state output");
+    refused(F.fmi2DeSerializeFMUstate(c, (const fmi2Byte *)"garbage!garbage!garbage!", 24, &fake),
+            "magic", "garbage state bytes");
+
+    check(F.fmi2SetupExperiment(c, 0, 0, 0, 1, 20) == fmi2OK, "setup with stop time 20");
+    check(F.fmi2EnterInitializationMode(c) == fmi2OK, "enter initialization");
+    refused(F.fmi2EnterInitializationMode(c), "not allowed", "enter twice");
+    fmi2ValueReference x0 = vr("x0");
+    fmi2Real below = -1.0, zero = 0.0;
+    check(F.fmi2SetReal(c, &x0, 1, &below) == fmi2OK, "x0 = -1 accepted by range");
+    refused(F.fmi2ExitInitializationMode(c), "below the plate", "mass below the plate");
+    check(F.fmi2SetReal(c, &x0, 1, &zero) == fmi2OK, "x0 = 0");
+    check(F.fmi2ExitInitializationMode(c) == fmi2OK, "exit initialization");
+    refused(F.fmi2SetReal(c, &zeta, 1, &one), "fixed parameter", "fixed parameter after init");
+    refused(F.fmi2DoStep(c, 0, 0, 0), "communicationStepSize = 0", "zero step");
+    refused(F.fmi2DoStep(c, 0, -1, 0), "communicationStepSize = -1", "negative step");
+    refused(F.fmi2DoStep(c, 0, INFINITY, 0), "communicationStepSize = inf", "infinite step");
+    refused(F.fmi2DoStep(c, 3, 1, 0), "does not match", "wrong communication point");
+    refused(F.fmi2DoStep(c, 0, 25, 0), "beyond stopTime", "step past the stop time");
+    refused(F.fmi2CancelStep(c), "synchronous", "cancel without a pending step");
+    refused(F.fmi2GetDirectionalDerivative(c, &x, 1, &zeta, 1, &one, &out), "not provided",
+            "directional derivative");
+    refused(F.fmi2GetRealOutputDerivatives(c, &x, 1, &(fmi2Integer){2}, &out), "only order 1",
+            "second output derivative");
+    refused(F.fmi2GetBooleanStatus(c, fmi2Terminated, NULL), "value is NULL", "NULL status output");
+    refused(F.fmi2GetRealStatus(c, 99, &out), "unknown status kind", "unknown status kind");
+    refused(F.fmi2GetString(c, &x, 1, &(fmi2String){NULL}), "not String", "get string");
+    fmi2Status st = fmi2OK;
+    check(F.fmi2GetStatus(c, fmi2DoStepStatus, &st) == fmi2Discard, "fmi2DoStepStatus is not available");
+
+    /* NULL component: every function refuses it without touching memory. */
+    check(F.fmi2DoStep(none, 0, 1, 0) == fmi2Error && F.fmi2GetReal(none, &x, 1, &out) == fmi2Error &&
+              F.fmi2SetReal(none, &zeta, 1, &one) == fmi2Error && F.fmi2Reset(none) == fmi2Error &&
+              F.fmi2Terminate(none) == fmi2Error && F.fmi2CancelStep(none) == fmi2Error,
+          "NULL component refused");
+    F.fmi2FreeInstance(none);
+
+    /* The instance is intact after all the refusals. */
+    check(F.fmi2DoStep(c, 0, 20, 0) == fmi2OK && integer(c, "impact_count") > 2, "still steps after refusals");
+    fmi2Integer der_order = 1;
+    check(F.fmi2GetRealOutputDerivatives(c, &x, 1, &der_order, &out) == fmi2OK && out == real(c, "v"),
+          "dx/dt is v");
+    check(F.fmi2Terminate(c) == fmi2OK, "terminate");
+    refused(F.fmi2DoStep(c, 20, 1, 0), "not allowed in state Terminated", "step after terminate");
+    check(F.fmi2Reset(c) == fmi2OK, "reset");
+    check(F.fmi2SetReal(c, &zeta, 1, &one) == fmi2OK, "parameters settable again after reset");
+    F.fmi2FreeInstance(c);
+}
+
+static double now(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* Wall time of a run over [0, t_end] with steps of size h, best of `reps`. */
+static double timed(double t_end, double h, int reps, int read) {
+    double best = INFINITY;
+    for (int r = 0; r < reps; r++) {
+        fmi2Component c = started(1.75, 0.07, 0);
+        double t0 = now();
+        run_reading(c, 0, t_end, h, read);
+        double dt = now() - t0;
+        best = dt < best ? dt : best;
+        F.fmi2FreeInstance(c);
+    }
+    return best;
+}
+
+static void bench(void) {
+    const double t_end = 1000.0, h = 0.01;
+    timed(t_end, h, 1, 0); /* warm up */
+    double small = timed(t_end, h, 7, 0), big = timed(t_end, t_end, 7, 0);
+    double reading = timed(t_end, h, 7, 1);
+    long steps = (long)(t_end / h + 0.5);
+    printf("bench: tau_end=%g baseline Omega=1.75 V=0.07 (best of 7)\n", t_end);
+    printf("bench: one step of %g: %.3f ms\n", t_end, big * 1e3);
+    printf("bench: h=%g: %ld steps, %.3f ms, %.1f ns per fmi2DoStep, ratio to one step %.2f\n", h,
+           steps, small * 1e3, small / (double)steps * 1e9, small / big);
+    printf("bench: h=%g + fmi2GetReal(x, v) each step: %.3f ms, %.1f ns per step, ratio %.2f\n", h,
+           reading * 1e3, reading / (double)steps * 1e9, reading / big);
+}
+
+int main(int argc, char **argv) {
+    if (argc != 4 || (strcmp(argv[1], "test") != 0 && strcmp(argv[1], "bench") != 0)) {
+        fprintf(stderr, "usage: %s test|bench LIB.so modelDescription.xml\n", argv[0]);
+        return 2;
+    }
+    xml = read_file(argv[3]);
+    if (!xml) {
+        fprintf(stderr, "cannot read %s\n", argv[3]);
+        return 2;
+    }
+    read_guid();
+    if (load(argv[2]) != 0) return 1;
+    if (strcmp(argv[1], "bench") == 0) {
+        bench();
+        return 0;
+    }
+    check(strcmp(F.fmi2GetVersion(), "2.0") == 0, "fmi2GetVersion is 2.0");
+    check(strcmp(F.fmi2GetTypesPlatform(), "default") == 0, "types platform is default");
+    step_size_independence();
+    fmu_state_across_instances();
+    logging_of_events();
+    illegal_calls();
+    printf("%d passed, %d failed\n", passed, failed);
+    return failed ? 1 : 0;
+}
