@@ -1,0 +1,516 @@
+//! `bistable_impact_node`: the bistable impact oscillator as a ROS 2 node (see `ros/README.md`).
+
+use std::collections::VecDeque;
+use std::process::ExitCode;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::mpsc;
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use bistable_impact_node::args::{self, Config, Parsed};
+use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, ShakerCommand};
+use bistable_impact_node::params::{Settings, SPECS};
+use bistable_impact_node::sim::{Outcome, Runner};
+use ros2_client::log::LogLevel;
+use ros2_client::qos::{Durability, History, Reliability, WhenFull};
+use ros2_client::rosout::{NodeLoggingHandle, RosoutRaw};
+use ros2_client::{
+    Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue,
+    Publisher, QosProfile, WriteError,
+};
+
+/// QoS of `/bistable/mass_state` and `/clock`: reliable (matches reliable and best-effort
+/// subscribers) but a full send window drops the sample instead of stalling the simulation.
+const fn sample_qos(depth: usize) -> QosProfile {
+    QosProfile::subscription_default()
+        .reliability(Reliability::Reliable {
+            when_full: WhenFull::Fail,
+        })
+        .durability(Durability::Volatile)
+        .history(History::KeepLast { depth })
+}
+
+/// QoS of `/bistable/impacts`: reliable; when the window of unacknowledged samples (8192) is
+/// full the simulation waits for the subscribers instead of dropping an impact. Transient
+/// local: a subscriber that joins late (e.g. after impact 0 at t = 0) first receives the last
+/// [`IMPACT_HISTORY`] impacts.
+const IMPACT_QOS: QosProfile = QosProfile::subscription_default()
+    .reliability(Reliability::Reliable {
+        when_full: WhenFull::Wait(Duration::from_millis(20)),
+    })
+    .durability(Durability::TransientLocal)
+    .history(History::KeepLast {
+        depth: IMPACT_HISTORY,
+    });
+
+/// Impacts kept for late-joining subscribers.
+const IMPACT_HISTORY: usize = 1000;
+
+/// QoS of `/bistable/shaker_command`: reliable, 100 deep.
+const COMMAND_QOS: QosProfile = QosProfile::subscription_default()
+    .reliability(Reliability::Reliable {
+        when_full: WhenFull::DEFAULT,
+    })
+    .history(History::KeepLast { depth: 100 });
+
+/// A parameter event from the parameter services (spinner thread) to the simulation loop.
+enum ParamEvent {
+    Set(String, ParameterValue),
+    Refused(String, String),
+}
+
+/// Logs to standard error and `/rosout`.
+struct Logger {
+    handle: NodeLoggingHandle,
+    name: String,
+    level: u8,
+    rosout: bool,
+    stdout: bool,
+}
+
+impl Logger {
+    fn log(&self, level: LogLevel, msg: &str) {
+        if (level as u8) < self.level {
+            return;
+        }
+        if self.stdout {
+            let tag = match level {
+                LogLevel::Debug => "DEBUG",
+                LogLevel::Info => "INFO",
+                LogLevel::Warn => "WARN",
+                LogLevel::Error => "ERROR",
+                LogLevel::Fatal => "FATAL",
+            };
+            let now = std::time::SystemTime::now()
+                .duration_since(std::time::UNIX_EPOCH)
+                .map_or(0.0, |d| d.as_secs_f64());
+            eprintln!("[{tag}] [{now:.9}] [{}]: {msg}", self.name);
+        }
+        if self.rosout {
+            self.handle.rosout_raw(
+                ros2_client::builtin_interfaces::Time::now(),
+                level,
+                &self.name,
+                msg,
+                file!(),
+                "bistable_impact_node",
+                line!(),
+            );
+        }
+    }
+}
+
+/// Counters reported at shutdown.
+#[derive(Default)]
+struct Counters {
+    states: u64,
+    states_dropped: u64,
+    impacts: u64,
+    impacts_failed: u64,
+    commands: u64,
+    commands_refused: u64,
+}
+
+/// Keeps simulation time at `real_time_factor` times wall-clock time.
+struct Pacer {
+    rtf: f64,
+    wall: Instant,
+    sim: f64,
+}
+
+impl Pacer {
+    fn new(rtf: f64, sim: f64) -> Self {
+        Self {
+            rtf,
+            wall: Instant::now(),
+            sim,
+        }
+    }
+
+    /// Sleeps until simulation time `t` [s] is due (returns at once when `rtf` is 0, or when
+    /// more than a second behind: then the schedule restarts from now).
+    fn wait(&mut self, t: f64, stop: &AtomicBool) {
+        if self.rtf <= 0.0 {
+            return;
+        }
+        let due = (t - self.sim) / self.rtf;
+        let elapsed = self.wall.elapsed().as_secs_f64();
+        if elapsed > due + 1.0 || !due.is_finite() {
+            *self = Self::new(self.rtf, t);
+            return;
+        }
+        while !stop.load(Ordering::Relaxed) {
+            let left = due - self.wall.elapsed().as_secs_f64();
+            if left <= 0.0 {
+                break;
+            }
+            std::thread::sleep(Duration::from_secs_f64(left.min(0.05)));
+        }
+    }
+}
+
+fn main() -> ExitCode {
+    let argv: Vec<String> = std::env::args().skip(1).collect();
+    let domain = std::env::var("ROS_DOMAIN_ID").ok();
+    let read = |f: &str| std::fs::read_to_string(f).map_err(|e| e.to_string());
+    match args::parse(&argv, domain.as_deref(), read) {
+        Ok(Parsed::Help) => {
+            println!("{}", args::USAGE);
+            let d = Settings::default();
+            for s in SPECS {
+                let kind = match s.change {
+                    bistable_impact_node::params::Change::Runtime => "runtime",
+                    bistable_impact_node::params::Change::StartUp => "start-up",
+                };
+                let v = d.get(s.name).map(|v| format!("{v:?}")).unwrap_or_default();
+                println!("  {:<17} {} ({kind}; default {v})", s.name, s.doc);
+            }
+            ExitCode::SUCCESS
+        }
+        Ok(Parsed::Run(cfg)) => match run(*cfg) {
+            Ok(()) => ExitCode::SUCCESS,
+            Err(e) => {
+                eprintln!("[FATAL] [bistable_impact]: {e}");
+                ExitCode::FAILURE
+            }
+        },
+        Err(e) => {
+            eprintln!("bistable_impact_node: {e}");
+            ExitCode::from(2)
+        }
+    }
+}
+
+fn err<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> String {
+    move |e| format!("cannot create the {what}: {e}")
+}
+
+fn topic_name(ns: &str, name: &str) -> Result<Name, String> {
+    Name::new(ns, name).map_err(|e| format!("bad topic name {ns}/{name}: {e:?}"))
+}
+
+fn run(cfg: Config) -> Result<(), String> {
+    let stop = Arc::new(AtomicBool::new(false));
+    {
+        let stop = Arc::clone(&stop);
+        ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
+            .map_err(|e| format!("cannot install the signal handler: {e}"))?;
+    }
+    let mut runner = Runner::new(&cfg.settings)?;
+    let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
+        .map_err(|e| format!("cannot join DDS domain {}: {e}", cfg.domain_id))?;
+    let node_name = NodeName::new(&cfg.namespace, &cfg.node_name)
+        .map_err(|e| format!("bad node name {}/{}: {e:?}", cfg.namespace, cfg.node_name))?;
+
+    let (param_tx, param_rx) = mpsc::channel();
+    let mut options = NodeOptions::new()
+        .enable_rosout(cfg.rosout)
+        .start_parameter_services(true);
+    for (name, value) in cfg.settings.values() {
+        options = options.declare_parameter(name, value);
+    }
+    if let Some(b) = cfg.use_sim_time {
+        options = options.declare_parameter("use_sim_time", ParameterValue::Boolean(b));
+    }
+    let initial = cfg.settings.clone();
+    let refused_tx = param_tx.clone();
+    let options = options
+        .parameter_validator(Box::new(move |name, value| {
+            initial.check_runtime(name, value).inspect_err(|reason| {
+                let _ = refused_tx.send(ParamEvent::Refused(name.to_owned(), reason.clone()));
+            })
+        }))
+        .parameter_set_action(Box::new(move |name, value| {
+            // The loop may be gone at shutdown; nothing to do then.
+            let _ = param_tx.send(ParamEvent::Set(name.to_owned(), value.clone()));
+            Ok(())
+        }));
+    let mut node = context
+        .new_node(node_name, options)
+        .map_err(|e| format!("cannot create the node: {e}"))?;
+    let spinner = node
+        .spinner()
+        .map_err(|e| format!("cannot start the parameter services: {e}"))?;
+    let spin_thread = std::thread::spawn(move || futures::executor::block_on(spinner.spin()));
+
+    let log = Logger {
+        handle: node.logging_handle(),
+        name: cfg.node_name.clone(),
+        level: cfg.log_level,
+        rosout: cfg.rosout,
+        stdout: cfg.stdout,
+    };
+    let msgs = "bistable_impact_msgs";
+    let create = |node: &mut Node, ns: &str, name: &str, pkg: &str, ty: &str, qos: &QosProfile| {
+        node.create_topic(&topic_name(ns, name)?, MessageTypeName::new(pkg, ty), qos)
+            .map_err(|e| format!("cannot create topic {name}: {e}"))
+    };
+    let state_qos = sample_qos(10);
+    let clock_qos = sample_qos(1);
+    let state_topic = create(
+        &mut node,
+        "/bistable",
+        "mass_state",
+        msgs,
+        "MassState",
+        &state_qos,
+    )?;
+    let impact_topic = create(
+        &mut node,
+        "/bistable",
+        "impacts",
+        msgs,
+        "ImpactEvent",
+        &IMPACT_QOS,
+    )?;
+    let command_topic = create(
+        &mut node,
+        "/bistable",
+        "shaker_command",
+        msgs,
+        "ShakerCommand",
+        &COMMAND_QOS,
+    )?;
+    let clock_topic = create(
+        &mut node,
+        "/",
+        "clock",
+        "rosgraph_msgs",
+        "Clock",
+        &clock_qos,
+    )?;
+    let state_pub: Publisher<MassState> = node
+        .create_publisher(&state_topic, Some(state_qos.clone()))
+        .map_err(err("mass state publisher"))?;
+    let impact_pub: Publisher<ImpactEvent> = node
+        .create_publisher(&impact_topic, Some(IMPACT_QOS))
+        .map_err(err("impact publisher"))?;
+    let clock_pub: Publisher<Clock> = node
+        .create_publisher(&clock_topic, Some(clock_qos))
+        .map_err(err("clock publisher"))?;
+    let command_sub = node
+        .create_subscription::<ShakerCommand>(&command_topic, Some(COMMAND_QOS))
+        .map_err(err("command subscription"))?;
+
+    let s = &cfg.settings;
+    log.log(
+        LogLevel::Info,
+        &format!(
+            "started {} in DDS domain {}: zeta = {}, e = {}, omega0 = {} rad/s, delta_x = {} m, \
+             Omega = {}, V = {}, publish_rate = {} Hz, real_time_factor = {}, frame_id = '{}'",
+            node.fully_qualified_name(),
+            cfg.domain_id,
+            s.zeta,
+            s.e,
+            s.omega0,
+            s.delta_x,
+            s.omega,
+            s.v,
+            s.publish_rate,
+            s.real_time_factor,
+            s.frame_id
+        ),
+    );
+    for w in &cfg.warnings {
+        log.log(LogLevel::Warn, w);
+    }
+
+    let mut settings = cfg.settings.clone();
+    let mut n = Counters::default();
+    let mut impacts: VecDeque<ImpactEvent> = VecDeque::new();
+    let mut fresh = Vec::new();
+    let mut pacer = Pacer::new(settings.real_time_factor, 0.0);
+    let mut last_outcome = Outcome::Tick;
+    publish_tick(&runner, &state_pub, &clock_pub, &mut n, &log);
+    while !stop.load(Ordering::Relaxed) {
+        for _ in 0..1000 {
+            match command_sub.take() {
+                Ok(Some((cmd, _))) => match runner.command(&cmd) {
+                    Ok(what) => {
+                        n.commands += 1;
+                        log.log(LogLevel::Info, &format!("accepted command: {what}"));
+                    }
+                    Err(why) => {
+                        n.commands_refused += 1;
+                        log.log(LogLevel::Warn, &format!("refused shaker command: {why}"));
+                    }
+                },
+                Ok(None) => break,
+                Err(e) => {
+                    n.commands_refused += 1;
+                    log.log(LogLevel::Warn, &format!("refused shaker command: {e}"));
+                    break;
+                }
+            }
+        }
+        while let Ok(ev) = param_rx.try_recv() {
+            match ev {
+                ParamEvent::Set(name, value) => {
+                    apply_parameter(&mut settings, &mut runner, &mut pacer, &name, &value, &log)
+                }
+                ParamEvent::Refused(name, why) => {
+                    log.log(LogLevel::Warn, &format!("refused parameter {name}: {why}"))
+                }
+            }
+        }
+        for note in runner.take_notes() {
+            log.log(LogLevel::Info, &note);
+        }
+        publish_impacts(&impact_pub, &mut impacts, &mut n, &log);
+        if !impacts.is_empty() {
+            // A reliable subscriber is behind: wait for it rather than lose an impact.
+            std::thread::sleep(Duration::from_millis(1));
+            pacer = Pacer::new(settings.real_time_factor, runner.now());
+            continue;
+        }
+        let outcome = runner.advance(&mut fresh);
+        impacts.extend(fresh.drain(..));
+        publish_impacts(&impact_pub, &mut impacts, &mut n, &log);
+        match outcome {
+            Outcome::Tick => {
+                publish_tick(&runner, &state_pub, &clock_pub, &mut n, &log);
+                pacer.wait(runner.now(), &stop);
+            }
+            Outcome::Command => {}
+            Outcome::Blocked | Outcome::Halted => {
+                if outcome != last_outcome {
+                    let msg = match runner.halted() {
+                        Some(why) => why.to_owned(),
+                        None => format!(
+                            "waiting at t = {} s for the next external plate sample",
+                            runner.now()
+                        ),
+                    };
+                    let level = if outcome == Outcome::Halted {
+                        LogLevel::Error
+                    } else {
+                        LogLevel::Info
+                    };
+                    log.log(level, &msg);
+                }
+                std::thread::sleep(Duration::from_millis(2));
+                pacer = Pacer::new(settings.real_time_factor, runner.now());
+            }
+        }
+        last_outcome = outcome;
+    }
+    log.log(
+        LogLevel::Info,
+        &format!(
+            "stopping at t = {} s: {} impacts located, {} published ({} failed), {} states \
+             published ({} dropped), {} commands accepted, {} refused",
+            runner.now(),
+            runner.impact_count(),
+            n.impacts,
+            n.impacts_failed,
+            n.states,
+            n.states_dropped,
+            n.commands,
+            n.commands_refused
+        ),
+    );
+    node.stop_spinner();
+    drop(node);
+    let _ = spin_thread.join();
+    Ok(())
+}
+
+fn publish_tick(
+    runner: &Runner,
+    state_pub: &Publisher<MassState>,
+    clock_pub: &Publisher<Clock>,
+    n: &mut Counters,
+    log: &Logger,
+) {
+    let state = runner.state();
+    let clock = Clock {
+        clock: state.header.stamp,
+    };
+    match state_pub.publish(state) {
+        Ok(()) => n.states += 1,
+        Err(WriteError::WouldBlock { .. }) => n.states_dropped += 1,
+        Err(e) => {
+            n.states_dropped += 1;
+            log.log(LogLevel::Warn, &format!("mass state not published: {e}"));
+        }
+    }
+    if let Err(e) = clock_pub.publish(clock) {
+        if !matches!(e, WriteError::WouldBlock { .. }) {
+            log.log(LogLevel::Warn, &format!("clock not published: {e}"));
+        }
+    }
+}
+
+/// Publishes the queued impacts in order; stops at the first one the subscribers cannot take
+/// yet (it stays queued).
+fn publish_impacts(
+    publisher: &Publisher<ImpactEvent>,
+    queue: &mut VecDeque<ImpactEvent>,
+    n: &mut Counters,
+    log: &Logger,
+) {
+    while let Some(msg) = queue.pop_front() {
+        let index = msg.index;
+        match publisher.publish(msg) {
+            Ok(()) => n.impacts += 1,
+            Err(WriteError::WouldBlock { data }) => {
+                queue.push_front(data);
+                return;
+            }
+            Err(e) => {
+                n.impacts_failed += 1;
+                log.log(
+                    LogLevel::Error,
+                    &format!("impact {index} not published: {e}"),
+                );
+            }
+        }
+    }
+}
+
+fn apply_parameter(
+    settings: &mut Settings,
+    runner: &mut Runner,
+    pacer: &mut Pacer,
+    name: &str,
+    value: &ParameterValue,
+    log: &Logger,
+) {
+    let before = settings.get(name);
+    if before.as_ref() == Some(value) {
+        return;
+    }
+    let mut next = settings.clone();
+    let result = next.set(name, value).and_then(|()| match name {
+        "zeta" | "e" => runner.set_params(next.zeta, next.e),
+        "publish_rate" => {
+            runner.set_rate(next.publish_rate);
+            Ok(())
+        }
+        "real_time_factor" => {
+            *pacer = Pacer::new(next.real_time_factor, runner.now());
+            Ok(())
+        }
+        "frame_id" => {
+            runner.set_frame_id(&next.frame_id);
+            Ok(())
+        }
+        _ => Ok(()),
+    });
+    match result {
+        Ok(()) => {
+            *settings = next;
+            log.log(
+                LogLevel::Info,
+                &format!(
+                    "parameter {name} changed from {before:?} to {value:?} at t = {} s",
+                    runner.now()
+                ),
+            );
+        }
+        Err(why) => log.log(
+            LogLevel::Error,
+            &format!("parameter {name} = {value:?} could not be applied: {why}"),
+        ),
+    }
+}

@@ -1,0 +1,461 @@
+//! The simulation side of the node, free of DDS: advances the core simulator from one publish
+//! tick to the next, turns its events into [`ImpactEvent`]s at their located times, schedules
+//! shaker commands, and converts everything to SI units (`model.md` Sec. 6:
+//! `x̂ = Δx·x`, `t̂ = τ/ω0`, velocities `ω0·Δx·v`, specific energies `(ω0·Δx)²·E`).
+//!
+//! Shaker commands take effect at `max(stamp, now, end of the queued commands)` (SI seconds of
+//! simulation time, a zero stamp meaning "now"), where "now" is the time of the last published
+//! state: the node applies commands between publish ticks. A sinusoid set-point continues the
+//! plate position and phase (`Simulator::set_sinusoid`). An external sample `(z, ż)` at time
+//! `t1` makes the plate follow the cubic Hermite curve from its position and velocity at the
+//! start of the piece to `(z, ż)` at `t1`; the simulation then waits at `t1` for the next
+//! sample or command. Plate position is therefore always continuous.
+
+use std::collections::VecDeque;
+
+use bistable_core::{
+    ChatterRule, ContactMode, Event, Impact, Instant, Params, PlateMotion, PolyPiece, SimError,
+    Simulator, Sinusoid, SolverOptions,
+};
+
+use crate::msg::{Header, ImpactEvent, MassState, ShakerCommand, Time};
+use crate::params::Settings;
+
+/// Most shaker commands waiting for their instant.
+pub const MAX_QUEUED_COMMANDS: usize = 1024;
+/// Largest accepted nondimensional plate position, velocity, `Ω` or `V` in a command (the
+/// model is meaningful for values of order one; far larger ones only overflow the integrator).
+pub const MAX_NONDIMENSIONAL: f64 = 1e6;
+
+/// A command waiting for its instant (times in SI seconds, values nondimensional).
+#[derive(Debug, Clone, Copy, PartialEq)]
+enum Scheduled {
+    /// Switch to the sinusoid `Ω`, `V` at `at`.
+    Sinusoid { at: f64, omega: f64, v: f64 },
+    /// From `start`, follow a Hermite cubic to `(z, zd)` at `end`.
+    Sample {
+        start: f64,
+        end: f64,
+        z: f64,
+        zd: f64,
+    },
+}
+
+impl Scheduled {
+    fn start(&self) -> f64 {
+        match *self {
+            Scheduled::Sinusoid { at, .. } => at,
+            Scheduled::Sample { start, .. } => start,
+        }
+    }
+
+    fn end(&self) -> f64 {
+        match *self {
+            Scheduled::Sinusoid { at, .. } => at,
+            Scheduled::Sample { end, .. } => end,
+        }
+    }
+}
+
+/// What one call of [`Runner::advance`] did.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Outcome {
+    /// Reached a publish tick: publish the state and the clock.
+    Tick,
+    /// Stopped at the instant of a queued command (applied by the next call).
+    Command,
+    /// The plate follows external samples and the last one is reached: waiting for more.
+    Blocked,
+    /// The simulation stopped on an error (see [`Runner::halted`]).
+    Halted,
+}
+
+/// The simulation with its publish schedule and command queue.
+pub struct Runner {
+    sim: Simulator,
+    omega0: f64,
+    delta_x: f64,
+    frame_id: String,
+    rate: f64,
+    tick_origin: f64,
+    tick_k: u64,
+    queue: VecDeque<Scheduled>,
+    /// SI end of the external piece the plate follows now.
+    piece_end: Option<f64>,
+    /// The last impact, held until it is known whether sticking follows it.
+    pending: Option<Impact>,
+    /// How long after an impact its sticking can start (nondimensional time).
+    lookahead: f64,
+    events: Vec<Event>,
+    notes: Vec<String>,
+    halted: Option<String>,
+}
+
+impl Runner {
+    /// The paper's initial condition (mass at rest at `x = 0`, impact 0 at `t = 0`) with the
+    /// shaker `Ω`, `V` of `settings`.
+    pub fn new(settings: &Settings) -> Result<Self, String> {
+        let params = Params::new(settings.zeta, settings.e).map_err(|e| e.to_string())?;
+        let plate = Sinusoid::new(settings.omega, settings.v).map_err(|e| e.to_string())?;
+        let opts = SolverOptions::default();
+        let lookahead = match opts.chatter() {
+            ChatterRule::Accumulation { horizon } => 2.0 * horizon,
+            ChatterRule::FixedGap { .. } => 0.0,
+        };
+        let sim = Simulator::new(params, plate.into(), opts).map_err(|e| e.to_string())?;
+        Ok(Self {
+            sim,
+            omega0: settings.omega0,
+            delta_x: settings.delta_x,
+            frame_id: settings.frame_id.clone(),
+            rate: settings.publish_rate,
+            tick_origin: 0.0,
+            tick_k: 0,
+            queue: VecDeque::new(),
+            piece_end: None,
+            pending: None,
+            lookahead,
+            events: Vec::new(),
+            notes: Vec::new(),
+            halted: None,
+        })
+    }
+
+    /// Current simulation time [s].
+    pub fn now(&self) -> f64 {
+        self.sim.time() / self.omega0
+    }
+
+    /// Impacts located so far.
+    pub fn impact_count(&self) -> u64 {
+        self.sim.stats().impacts
+    }
+
+    /// The error that stopped the simulation, if any.
+    pub fn halted(&self) -> Option<&str> {
+        self.halted.as_deref()
+    }
+
+    /// Messages about applied or dropped commands since the last call, for the log.
+    pub fn take_notes(&mut self) -> Vec<String> {
+        std::mem::take(&mut self.notes)
+    }
+
+    /// Publish rate [Hz of simulation time]; ticks restart from the current time.
+    pub fn set_rate(&mut self, rate: f64) {
+        self.rate = rate;
+        self.tick_origin = self.now();
+        self.tick_k = 0;
+    }
+
+    /// Frame of the published headers.
+    pub fn set_frame_id(&mut self, frame_id: &str) {
+        frame_id.clone_into(&mut self.frame_id);
+    }
+
+    /// Changes `ζ` and `e` from the current time on (the integration restarts here).
+    pub fn set_params(&mut self, zeta: f64, e: f64) -> Result<(), String> {
+        Params::new(zeta, e).map_err(|err| err.to_string())?;
+        let plate = *self.sim.plate();
+        let mut sim = self.sim.clone();
+        sim.set_plate(plate).map_err(|err| err.to_string())?;
+        let mut c = sim.checkpoint();
+        c.zeta = zeta;
+        c.restitution = e;
+        self.sim = Simulator::from_checkpoint(&c).map_err(|err| err.to_string())?;
+        self.halted = None;
+        Ok(())
+    }
+
+    /// Validates a shaker command and queues it; returns what was scheduled, or why the
+    /// command is refused (then nothing changes).
+    pub fn command(&mut self, cmd: &ShakerCommand) -> Result<String, String> {
+        let stamp = cmd.header.stamp;
+        if stamp.sec < 0 || stamp.nanosec >= 1_000_000_000 {
+            return Err(format!(
+                "invalid stamp {}.{:09}: sec must be >= 0 and nanosec < 1e9",
+                stamp.sec, stamp.nanosec
+            ));
+        }
+        for (name, value) in [
+            ("omega", cmd.omega),
+            ("velocity", cmd.velocity),
+            ("z", cmd.z),
+            ("zdot", cmd.zdot),
+        ] {
+            if !value.is_finite() {
+                return Err(format!("{name} = {value} is not finite"));
+            }
+        }
+        if self.queue.len() >= MAX_QUEUED_COMMANDS {
+            return Err(format!(
+                "{MAX_QUEUED_COMMANDS} commands are already waiting for their instant"
+            ));
+        }
+        let (frontier, external) = self.frontier();
+        let item = match cmd.mode {
+            ShakerCommand::MODE_SINUSOID => {
+                let omega = cmd.omega / self.omega0;
+                let v = cmd.velocity / (self.omega0 * self.delta_x);
+                if !(cmd.omega > 0.0 && omega > 0.0 && omega <= MAX_NONDIMENSIONAL) {
+                    return Err(format!(
+                        "omega = {} rad/s must be > 0 and at most {MAX_NONDIMENSIONAL:e}·omega0",
+                        cmd.omega
+                    ));
+                }
+                if !(cmd.velocity >= 0.0 && v <= MAX_NONDIMENSIONAL) {
+                    return Err(format!(
+                        "velocity = {} m/s must be >= 0 and at most {MAX_NONDIMENSIONAL:e}·omega0·delta_x",
+                        cmd.velocity
+                    ));
+                }
+                // After external motion the sinusoid takes over where the samples end, so that
+                // the plate motion stays defined.
+                let at = if external || stamp.is_zero() {
+                    frontier
+                } else {
+                    stamp.to_seconds().max(frontier)
+                };
+                Scheduled::Sinusoid { at, omega, v }
+            }
+            ShakerCommand::MODE_EXTERNAL => {
+                let z = cmd.z / self.delta_x;
+                let zd = cmd.zdot / (self.omega0 * self.delta_x);
+                if z.abs() > MAX_NONDIMENSIONAL || zd.abs() > MAX_NONDIMENSIONAL {
+                    return Err(format!(
+                        "z = {} m or zdot = {} m/s is out of range (at most {MAX_NONDIMENSIONAL:e} \
+                         delta_x and omega0·delta_x)",
+                        cmd.z, cmd.zdot
+                    ));
+                }
+                let end = if stamp.is_zero() {
+                    frontier + 1.0 / self.rate
+                } else {
+                    stamp.to_seconds()
+                };
+                if self.omega0 * end <= self.omega0 * frontier {
+                    return Err(format!(
+                        "sample time {end} s is not after {frontier} s (the current simulation \
+                         time or the end of the queued commands)"
+                    ));
+                }
+                Scheduled::Sample {
+                    start: frontier,
+                    end,
+                    z,
+                    zd,
+                }
+            }
+            other => {
+                return Err(format!(
+                    "unknown mode {other} (MODE_SINUSOID = 0, MODE_EXTERNAL = 1)"
+                ))
+            }
+        };
+        self.queue.push_back(item);
+        Ok(match item {
+            Scheduled::Sinusoid { at, .. } => format!(
+                "shaker sinusoid omega = {} rad/s, velocity = {} m/s from t = {at} s",
+                cmd.omega, cmd.velocity
+            ),
+            Scheduled::Sample { start, end, .. } => format!(
+                "external plate sample z = {} m, zdot = {} m/s at t = {end} s (from t = {start} s)",
+                cmd.z, cmd.zdot
+            ),
+        })
+    }
+
+    /// The instant from which a new command can act [s], and whether the plate follows
+    /// external samples there.
+    fn frontier(&self) -> (f64, bool) {
+        let mut frontier = self.now();
+        let mut external = false;
+        if let Some(end) = self.piece_end {
+            frontier = frontier.max(end);
+            external = true;
+        }
+        if let Some(last) = self.queue.back() {
+            frontier = frontier.max(last.end());
+            external = matches!(last, Scheduled::Sample { .. });
+        }
+        (frontier, external)
+    }
+
+    /// Applies the queued commands whose instant has come.
+    fn apply_due(&mut self) {
+        while let Some(&item) = self.queue.front() {
+            if self.omega0 * item.start() > self.sim.time() {
+                break;
+            }
+            self.queue.pop_front();
+            let t = self.now();
+            let result = match item {
+                Scheduled::Sinusoid { omega, v, .. } => self.sim.set_sinusoid(omega, v).map(|()| {
+                    self.piece_end = None;
+                    format!("shaker sinusoid applied at t = {t} s")
+                }),
+                Scheduled::Sample { end, z, zd, .. } => self.follow_sample(end, z, zd).map(|()| {
+                    self.piece_end = Some(end);
+                    format!("external plate motion to t = {end} s applied at t = {t} s")
+                }),
+            };
+            match result {
+                Ok(note) => {
+                    self.halted = None;
+                    self.notes.push(note);
+                }
+                Err(e) => self
+                    .notes
+                    .push(format!("shaker command dropped at t = {t} s: {e}")),
+            }
+        }
+    }
+
+    fn follow_sample(&mut self, end: f64, z: f64, zd: f64) -> Result<(), SimError> {
+        let now = self.sim.state();
+        let piece = PolyPiece::hermite(
+            self.sim.instant(),
+            Instant::new(self.omega0 * end),
+            (now.z, now.zdot),
+            (z, zd),
+        )?;
+        self.sim.set_plate(piece.into())
+    }
+
+    fn next_tick(&self) -> f64 {
+        self.tick_origin + (self.tick_k + 1) as f64 / self.rate
+    }
+
+    /// Advances to the next publish tick, or to the instant of the next queued command, or to
+    /// the end of the external plate motion, whichever comes first; appends the impacts that
+    /// are complete (their sticking flag known) to `impacts`, in order.
+    pub fn advance(&mut self, impacts: &mut Vec<ImpactEvent>) -> Outcome {
+        self.apply_due();
+        if self.halted.is_some() {
+            return Outcome::Halted;
+        }
+        let now = self.sim.time();
+        let mut target = self.omega0 * self.next_tick();
+        let mut outcome = Outcome::Tick;
+        if let Some(item) = self.queue.front() {
+            let start = self.omega0 * item.start();
+            if start < target {
+                target = start;
+                outcome = Outcome::Command;
+            }
+        }
+        if let Some(h) = self.sim.plate().horizon() {
+            let h = h.to_f64();
+            if h < target {
+                target = h;
+                outcome = Outcome::Blocked;
+            }
+        }
+        if outcome == Outcome::Blocked && target <= now {
+            return Outcome::Blocked;
+        }
+        let events = &mut self.events;
+        let result = self
+            .sim
+            .advance_to(target, &mut |e: &Event| events.push(*e));
+        self.collect(impacts);
+        if let Err(e) = result {
+            self.halted = Some(format!(
+                "simulation stopped at t = {} s: {e}; it resumes after a parameter change or \
+                 shaker command that lets it go on",
+                self.now()
+            ));
+            return Outcome::Halted;
+        }
+        if outcome == Outcome::Tick {
+            self.tick_k += 1;
+        }
+        outcome
+    }
+
+    /// Turns the collected events into complete impacts.
+    fn collect(&mut self, out: &mut Vec<ImpactEvent>) {
+        for e in std::mem::take(&mut self.events).drain(..) {
+            if let Some(p) = self.pending {
+                if e.t() - p.t > self.lookahead {
+                    out.push(self.impact_msg(&p, false));
+                    self.pending = None;
+                }
+            }
+            match e {
+                Event::Impact(i) => {
+                    if let Some(p) = self.pending.replace(i) {
+                        out.push(self.impact_msg(&p, false));
+                    }
+                }
+                Event::StickStart { impacts, .. } => {
+                    if let Some(p) = self.pending.take() {
+                        out.push(self.impact_msg(&p, impacts == p.index + 1));
+                    }
+                }
+                Event::StickEnd { .. } | Event::SnapThrough { .. } => {}
+            }
+        }
+        if let Some(p) = self.pending {
+            if self.sim.time() - p.t > self.lookahead {
+                out.push(self.impact_msg(&p, false));
+                self.pending = None;
+            }
+        }
+    }
+
+    fn header(&self, t: f64) -> Header {
+        Header {
+            stamp: Time::from_seconds(t),
+            frame_id: self.frame_id.clone(),
+        }
+    }
+
+    fn impact_msg(&self, i: &Impact, ended_in_sticking: bool) -> ImpactEvent {
+        let (w, l) = (self.omega0, self.delta_x);
+        let t = i.t / w;
+        ImpactEvent {
+            header: self.header(t),
+            index: i.index,
+            t,
+            phase: i.phase.unwrap_or(f64::NAN),
+            x: l * i.x,
+            v_before: w * l * i.v_before,
+            v_after: w * l * i.v_after,
+            zdot: w * l * i.zdot,
+            delta_k: (w * l).powi(2) * i.delta_k,
+            ended_in_sticking,
+        }
+    }
+
+    /// The state at the current time, in SI units.
+    pub fn state(&self) -> MassState {
+        let (w, l) = (self.omega0, self.delta_x);
+        let s = self.sim.state();
+        let t = s.t / w;
+        let (mode, omega, velocity) = match self.sim.plate() {
+            PlateMotion::Sinusoid(p) => (
+                ShakerCommand::MODE_SINUSOID,
+                p.omega() * w,
+                p.velocity() * w * l,
+            ),
+            PlateMotion::Poly(_) => (ShakerCommand::MODE_EXTERNAL, f64::NAN, f64::NAN),
+        };
+        MassState {
+            header: self.header(t),
+            t,
+            x: l * s.x,
+            v: w * l * s.v,
+            z: l * s.z,
+            zdot: w * l * s.zdot,
+            kinetic_energy: (w * l).powi(2) * s.kinetic_energy(),
+            potential_energy: (w * l).powi(2) * s.potential_energy(),
+            well: s.well.number(),
+            in_contact: s.mode == ContactMode::Sticking,
+            impact_count: self.sim.stats().impacts,
+            shaker_mode: mode,
+            shaker_omega: omega,
+            shaker_velocity: velocity,
+        }
+    }
+}

@@ -1,0 +1,333 @@
+//! The node's simulation loop against the core simulator: every impact, in order, at its
+//! located time; commands at their documented instants; bad input refused.
+
+use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
+use bistable_impact_node::msg::{Header, ImpactEvent, ShakerCommand, Time};
+use bistable_impact_node::params::Settings;
+use bistable_impact_node::sim::{Outcome, Runner, MAX_QUEUED_COMMANDS};
+
+fn settings(omega: f64, v: f64, rate: f64) -> Settings {
+    Settings {
+        omega,
+        v,
+        publish_rate: rate,
+        ..Settings::default()
+    }
+}
+
+/// Runs until simulation time `t_end` [s], returning the impacts and the tick times.
+fn run_until(r: &mut Runner, t_end: f64) -> (Vec<ImpactEvent>, Vec<f64>) {
+    let (mut impacts, mut ticks) = (Vec::new(), Vec::new());
+    while r.now() < t_end {
+        match r.advance(&mut impacts) {
+            Outcome::Tick => ticks.push(r.now()),
+            Outcome::Command => {}
+            other => panic!("unexpected {other:?} at {}", r.now()),
+        }
+    }
+    (impacts, ticks)
+}
+
+fn core_impacts(sim: &mut Simulator, t: f64) -> Vec<bistable_core::Impact> {
+    sim.events_until(t)
+        .unwrap()
+        .into_iter()
+        .filter_map(|e| match e {
+            Event::Impact(i) => Some(i),
+            _ => None,
+        })
+        .collect()
+}
+
+fn paper_sim(omega: f64, v: f64) -> Simulator {
+    let plate = Sinusoid::new(omega, v).unwrap();
+    Simulator::new(Params::paper(), plate.into(), SolverOptions::default()).unwrap()
+}
+
+fn cmd(mode: u8, stamp: f64, omega: f64, velocity: f64, z: f64, zdot: f64) -> ShakerCommand {
+    ShakerCommand {
+        header: Header {
+            stamp: Time::from_seconds(stamp),
+            frame_id: String::new(),
+        },
+        mode,
+        omega,
+        velocity,
+        z,
+        zdot,
+    }
+}
+
+#[test]
+fn every_impact_in_order_equal_to_the_core() {
+    let mut r = Runner::new(&settings(1.75, 0.07, 7.0)).unwrap();
+    let (impacts, ticks) = run_until(&mut r, 300.0);
+    let reference = core_impacts(&mut paper_sim(1.75, 0.07), 300.0);
+    // The last impact may still wait for its sticking decision.
+    assert!(
+        impacts.len() + 1 >= reference.len() && impacts.len() > 30,
+        "{}",
+        impacts.len()
+    );
+    for (k, (got, want)) in impacts.iter().zip(&reference).enumerate() {
+        assert_eq!(got.index, k as u64);
+        // Output ticks never restart the integration: the values are identical.
+        assert_eq!(
+            (
+                got.t,
+                got.x,
+                got.v_before,
+                got.v_after,
+                got.zdot,
+                got.delta_k
+            ),
+            (
+                want.t,
+                want.x,
+                want.v_before,
+                want.v_after,
+                want.zdot,
+                want.delta_k
+            )
+        );
+        assert_eq!(got.phase, want.phase.unwrap());
+        assert_eq!(
+            got.header.stamp,
+            Time::from_seconds(want.t),
+            "stamped at the impact"
+        );
+        assert!(!got.ended_in_sticking);
+    }
+    // Ticks every 1/7 s of simulation time.
+    for (k, t) in ticks.iter().enumerate() {
+        assert!((t - (k + 1) as f64 / 7.0).abs() < 1e-12, "tick {k} at {t}");
+    }
+    assert_eq!(r.state().impact_count, reference.len() as u64);
+}
+
+#[test]
+fn si_units_scale_the_nondimensional_solution() {
+    let (w, l) = (std::f64::consts::TAU * 3.08, 0.028_19);
+    let s = Settings {
+        omega0: w,
+        delta_x: l,
+        ..settings(1.75, 0.07, 50.0)
+    };
+    let mut r = Runner::new(&s).unwrap();
+    let (impacts, _) = run_until(&mut r, 60.0 / w);
+    let reference = core_impacts(&mut paper_sim(1.75, 0.07), 59.0);
+    assert!(impacts.len() >= reference.len() - 1 && reference.len() > 5);
+    for (got, want) in impacts.iter().zip(&reference) {
+        let close = |a: f64, b: f64| (a - b).abs() <= 1e-14 * b.abs().max(1e-300);
+        assert!(close(got.t, want.t / w) && close(got.x, want.x * l));
+        assert!(close(got.v_after, want.v_after * w * l));
+        assert!(close(got.delta_k, want.delta_k * (w * l).powi(2)));
+    }
+    let st = r.state();
+    assert!(
+        (st.shaker_omega - 1.75 * w).abs() < 1e-12
+            && (st.shaker_velocity - 0.07 * w * l).abs() < 1e-15
+    );
+    assert!(st.kinetic_energy >= 0.0 && (st.kinetic_energy - 0.5 * st.v * st.v).abs() < 1e-15);
+}
+
+#[test]
+fn sinusoid_command_takes_effect_at_its_stamp_without_a_jump() {
+    let mut r = Runner::new(&settings(1.75, 0.07, 10.0)).unwrap();
+    let (mut impacts, _) = run_until(&mut r, 20.0);
+    let what = r
+        .command(&cmd(
+            ShakerCommand::MODE_SINUSOID,
+            40.25,
+            2.5,
+            0.1,
+            0.0,
+            0.0,
+        ))
+        .unwrap();
+    assert!(what.contains("40.25"), "{what}");
+    let (before, _) = run_until(&mut r, 40.25);
+    impacts.extend(before);
+    let z_before = r.state().z;
+    let (after, _) = run_until(&mut r, 150.0);
+    impacts.extend(after);
+    let st = r.state();
+    assert_eq!((st.shaker_omega, st.shaker_velocity), (2.5, 0.1));
+
+    let mut sim = paper_sim(1.75, 0.07);
+    let mut reference = core_impacts(&mut sim, 40.25);
+    assert!(
+        (sim.state().z - z_before).abs() < 1e-15,
+        "plate position is continuous"
+    );
+    sim.set_sinusoid(2.5, 0.1).unwrap();
+    reference.extend(core_impacts(&mut sim, 149.0));
+    assert!(reference.len() > 20);
+    for (got, want) in impacts.iter().zip(&reference) {
+        assert_eq!(
+            (got.index, got.t, got.v_after),
+            (want.index, want.t, want.v_after)
+        );
+    }
+    // A zero stamp means "now"; a stamp in the past too.
+    let now = r.now();
+    let what = r.command(&cmd(0, 0.0, 1.0, 0.05, 0.0, 0.0)).unwrap();
+    assert!(what.contains(&format!("t = {now} s")), "{what}");
+    let what = r.command(&cmd(0, 1.0, 1.0, 0.05, 0.0, 0.0)).unwrap();
+    assert!(what.contains(&format!("t = {now} s")), "{what}");
+}
+
+#[test]
+fn external_samples_are_followed_then_the_simulation_waits() {
+    let mut r = Runner::new(&settings(1.75, 0.07, 10.0)).unwrap();
+    run_until(&mut r, 5.0);
+    // Plate samples of z = 0.04 sin(t) for t = 5.5, 6.0, ..., 8.0.
+    for k in 1..=6 {
+        let t = 5.0 + 0.5 * k as f64;
+        r.command(&cmd(
+            ShakerCommand::MODE_EXTERNAL,
+            t,
+            0.0,
+            0.0,
+            0.04 * t.sin(),
+            0.04 * t.cos(),
+        ))
+        .unwrap();
+    }
+    let mut impacts = Vec::new();
+    let mut checked = 0;
+    loop {
+        match r.advance(&mut impacts) {
+            Outcome::Blocked => break,
+            Outcome::Halted => panic!("{:?}", r.halted()),
+            _ => {}
+        }
+        let st = r.state();
+        let t = r.now();
+        if ((t - 5.0) * 2.0).fract() == 0.0 && t > 5.0 {
+            assert!(
+                (st.z - 0.04 * t.sin()).abs() < 1e-12 && (st.zdot - 0.04 * t.cos()).abs() < 1e-12
+            );
+            assert_eq!(st.shaker_mode, ShakerCommand::MODE_EXTERNAL);
+            assert!(st.shaker_omega.is_nan());
+            checked += 1;
+        }
+    }
+    assert_eq!(checked, 6);
+    assert_eq!(r.now(), 8.0, "waits at the last sample");
+    assert_eq!(r.advance(&mut impacts), Outcome::Blocked);
+    // Out of order or non-advancing samples are refused; a zero stamp means one period later.
+    let err = r.command(&cmd(1, 7.0, 0.0, 0.0, 0.0, 0.0)).unwrap_err();
+    assert!(err.contains("not after"), "{err}");
+    let ok = r
+        .command(&cmd(1, 0.0, 0.0, 0.0, 0.04 * 8.1f64.sin(), 0.0))
+        .unwrap();
+    assert!(ok.contains("t = 8.1 s"), "{ok}");
+    // A sinusoid after external motion takes over where the samples end, whatever its stamp.
+    let ok = r.command(&cmd(0, 100.0, 1.75, 0.07, 0.0, 0.0)).unwrap();
+    assert!(ok.contains("from t = 8.1 s"), "{ok}");
+    let z_end = 0.04 * 8.1f64.sin();
+    while r.now() < 8.1 {
+        assert_ne!(r.advance(&mut impacts), Outcome::Halted);
+    }
+    assert!((r.state().z - z_end).abs() < 1e-12);
+    run_until(&mut r, 20.0);
+    assert_eq!(r.state().shaker_mode, ShakerCommand::MODE_SINUSOID);
+}
+
+#[test]
+fn bad_commands_are_refused_with_reasons_and_change_nothing() {
+    let mut r = Runner::new(&settings(1.75, 0.07, 10.0)).unwrap();
+    run_until(&mut r, 3.0);
+    let nan = f64::NAN;
+    for (c, needle) in [
+        (cmd(0, 0.0, nan, 0.1, 0.0, 0.0), "omega = NaN"),
+        (cmd(0, 0.0, f64::INFINITY, 0.1, 0.0, 0.0), "not finite"),
+        (cmd(0, 0.0, 1.0, -0.1, 0.0, 0.0), "velocity"),
+        (cmd(0, 0.0, 0.0, 0.1, 0.0, 0.0), "omega"),
+        (cmd(0, 0.0, -1.0, 0.1, 0.0, 0.0), "omega"),
+        (cmd(0, 0.0, 1e300, 0.1, 0.0, 0.0), "omega"),
+        (cmd(0, 0.0, 1.0, 0.1, f64::NEG_INFINITY, 0.0), "z = -inf"),
+        (cmd(1, 0.0, 0.0, 0.0, 0.0, nan), "zdot"),
+        (cmd(1, 0.0, 0.0, 0.0, 1e9, 0.0), "out of range"),
+        (cmd(1, 2.0, 0.0, 0.0, 0.0, 0.0), "not after"),
+        (cmd(7, 0.0, 1.0, 0.1, 0.0, 0.0), "unknown mode 7"),
+        (cmd(255, 0.0, 1.0, 0.1, 0.0, 0.0), "unknown mode"),
+    ] {
+        let err = r.command(&c).unwrap_err();
+        assert!(err.contains(needle), "{c:?}: {err}");
+    }
+    let mut bad_stamp = cmd(0, 0.0, 1.0, 0.1, 0.0, 0.0);
+    bad_stamp.header.stamp = Time {
+        sec: -1,
+        nanosec: 0,
+    };
+    assert!(r.command(&bad_stamp).unwrap_err().contains("stamp"));
+    bad_stamp.header.stamp = Time {
+        sec: 1,
+        nanosec: 1_000_000_000,
+    };
+    assert!(r.command(&bad_stamp).unwrap_err().contains("stamp"));
+    // Nothing was queued: the simulation goes on with the old shaker and matches the core.
+    let (impacts, _) = run_until(&mut r, 60.0);
+    let reference = core_impacts(&mut paper_sim(1.75, 0.07), 60.0);
+    let last = impacts.last().unwrap();
+    assert_eq!(last.t, reference[last.index as usize].t);
+    assert_eq!(r.state().shaker_omega, 1.75);
+    // The queue is bounded.
+    for k in 0..MAX_QUEUED_COMMANDS {
+        r.command(&cmd(0, 100.0 + k as f64, 1.75, 0.07, 0.0, 0.0))
+            .unwrap();
+    }
+    assert!(r
+        .command(&cmd(0, 0.0, 1.75, 0.07, 0.0, 0.0))
+        .unwrap_err()
+        .contains("waiting"));
+}
+
+#[test]
+fn impacts_that_end_in_sticking_are_flagged() {
+    // Slow shaking: chatter sequences that end with the mass riding on the plate.
+    let mut r = Runner::new(&settings(0.2, 0.05, 10.0)).unwrap();
+    let (impacts, _) = run_until(&mut r, 100.0);
+    let mut sim = paper_sim(0.2, 0.05);
+    let events = sim.events_until(100.0).unwrap();
+    let sticking: Vec<u64> = events
+        .iter()
+        .filter_map(|e| match e {
+            Event::StickStart { impacts, .. } if *impacts > 0 => Some(impacts - 1),
+            _ => None,
+        })
+        .collect();
+    assert!(!sticking.is_empty(), "the case must stick");
+    let flagged: Vec<u64> = impacts
+        .iter()
+        .filter(|i| i.ended_in_sticking)
+        .map(|i| i.index)
+        .collect();
+    let published = impacts.len() as u64;
+    let expected: Vec<u64> = sticking.into_iter().filter(|&k| k < published).collect();
+    assert_eq!(flagged, expected);
+    for (k, i) in impacts.iter().enumerate() {
+        assert_eq!(i.index, k as u64);
+    }
+}
+
+#[test]
+fn runtime_changes_of_parameters_and_rate() {
+    let mut r = Runner::new(&settings(1.75, 0.07, 10.0)).unwrap();
+    run_until(&mut r, 10.0);
+    let before = r.state();
+    r.set_params(0.3, 0.5).unwrap();
+    let after = r.state();
+    assert!((before.x - after.x).abs() < 1e-15 && (before.v - after.v).abs() < 1e-15);
+    assert!(r.set_params(f64::NAN, 0.5).unwrap_err().contains("zeta"));
+    assert!(r.set_params(0.1, 1.5).unwrap_err().contains("restitution"));
+    // Heavy damping: the energy decays.
+    run_until(&mut r, 40.0);
+    r.set_rate(4.0);
+    let (_, ticks) = run_until(&mut r, 42.0);
+    assert_eq!(ticks, [40.25, 40.5, 40.75, 41.0, 41.25, 41.5, 41.75, 42.0]);
+    r.set_frame_id("lab");
+    assert_eq!(r.state().header.frame_id, "lab");
+}
