@@ -82,7 +82,7 @@ pub struct Classification {
     pub lyapunov: Option<f64>,
     /// Barrier crossings over the whole run.
     pub snap_throughs: u64,
-    /// Well at the end.
+    /// Well at the last section (for a continuous interwell orbit: where the run stopped).
     pub final_well: Well,
     /// Converged to rest at the second equilibrium `x = 1`.
     pub at_rest_in_second_well: bool,
