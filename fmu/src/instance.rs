@@ -379,7 +379,8 @@ impl Instance {
     }
 
     /// `fmi2SetRealInputDerivatives`: derivatives of `z_in` (orders 1..=5) and `zdot_in`
-    /// (orders 1..=4), in SI units, valid for the next step.
+    /// (orders 1..=4), in SI units, valid for the next step. Both name plate derivatives of
+    /// order ≥ 2 (the later call wins); order 1 of `z_in` is accepted and superseded by `zdot_in`.
     pub fn set_input_derivatives(
         &mut self,
         vrs: &[fmi2ValueReference],
@@ -414,7 +415,8 @@ impl Instance {
             }
             checked.push((order as usize + shift, value));
         }
-        for (k, value) in checked {
+        // Order 1 of z_in is the plate velocity, which the input zdot_in gives: not stored.
+        for (k, value) in checked.into_iter().filter(|&(k, _)| k >= 2) {
             self.derivatives[k] = Some(value);
             self.derivatives_given = true;
         }

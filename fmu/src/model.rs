@@ -106,12 +106,12 @@ impl Scale {
 /// Plate derivatives for the next step (SI, order 0..=5); `None`: not given (zero above order 1).
 pub type PlateInputs = [Option<f64>; MAX_PLATE_ORDER + 1];
 
-/// The plate derivatives from the inputs: `z_in`, then `zdot_in` unless a first derivative of
-/// `z_in` was given (`derivatives`, from `fmi2SetRealInputDerivatives`), then the higher ones.
+/// The plate derivatives from the inputs: `z_in`, `zdot_in`, then the higher ones given with
+/// `fmi2SetRealInputDerivatives` (`derivatives`, orders 2..=5).
 fn plate_inputs(values: &[f64], derivatives: &PlateInputs) -> PlateInputs {
     let mut p = *derivatives;
     p[0] = Some(values[var::z_in]);
-    p[1] = p[1].or(Some(values[var::zdot_in]));
+    p[1] = Some(values[var::zdot_in]);
     p
 }
 
