@@ -125,15 +125,20 @@ typedef int fmi2StatusKind;
 extern "C" {
 #endif // __cplusplus
 
+// `"default"`: the standard FMI 2.0 platform types.
 const char *fmi2GetTypesPlatform(void);
 
+// `"2.0"`.
 const char *fmi2GetVersion(void);
 
+// Switches logging of the listed categories (all of them when `nCategories` is 0) on or off.
 fmi2Status fmi2SetDebugLogging(fmi2Component c,
                                fmi2Boolean loggingOn,
                                size_t nCategories,
                                const fmi2String *categories);
 
+// A new co-simulation instance, or NULL (with a logged reason) for a wrong GUID, FMU type,
+// name or NULL callbacks. `fmuResourceLocation` and `visible` are not used.
 fmi2Component fmi2Instantiate(fmi2String instanceName,
                               fmi2Type fmuType,
                               fmi2String fmuGUID,
@@ -142,8 +147,10 @@ fmi2Component fmi2Instantiate(fmi2String instanceName,
                               fmi2Boolean _visible,
                               fmi2Boolean loggingOn);
 
+// Frees the instance and the FMU states it handed out.
 void fmi2FreeInstance(fmi2Component c);
 
+// Start time and optional stop time (s); the tolerance is ignored (see the parameter `tol`).
 fmi2Status fmi2SetupExperiment(fmi2Component c,
                                fmi2Boolean toleranceDefined,
                                fmi2Real tolerance,
@@ -151,77 +158,98 @@ fmi2Status fmi2SetupExperiment(fmi2Component c,
                                fmi2Boolean stopTimeDefined,
                                fmi2Real stopTime);
 
+// Enters initialization mode.
 fmi2Status fmi2EnterInitializationMode(fmi2Component c);
 
+// Checks the parameters, starts the simulation at the start time (processing the events there)
+// and enters step mode.
 fmi2Status fmi2ExitInitializationMode(fmi2Component c);
 
+// Ends the simulation (values stay readable).
 fmi2Status fmi2Terminate(fmi2Component c);
 
+// Back to the instantiated state with the start values.
 fmi2Status fmi2Reset(fmi2Component c);
 
+// Real values (SI units) of the variables `vr[0..nvr]`.
 fmi2Status fmi2GetReal(fmi2Component c,
                        const fmi2ValueReference *vr,
                        size_t nvr,
                        fmi2Real *value);
 
+// Integer and Enumeration values of the variables `vr[0..nvr]`.
 fmi2Status fmi2GetInteger(fmi2Component c,
                           const fmi2ValueReference *vr,
                           size_t nvr,
                           fmi2Integer *value);
 
+// Boolean values (`fmi2True`/`fmi2False`) of the variables `vr[0..nvr]`.
 fmi2Status fmi2GetBoolean(fmi2Component c,
                           const fmi2ValueReference *vr,
                           size_t nvr,
                           fmi2Boolean *value);
 
+// String values: the model has none, so any value reference is refused.
 fmi2Status fmi2GetString(fmi2Component c,
                          const fmi2ValueReference *vr,
                          size_t nvr,
                          fmi2String *value);
 
+// Sets Real parameters or inputs (SI units, checked against their ranges; all or none).
 fmi2Status fmi2SetReal(fmi2Component c,
                        const fmi2ValueReference *vr,
                        size_t nvr,
                        const fmi2Real *value);
 
+// Sets Integer or Enumeration parameters (checked against their ranges; all or none).
 fmi2Status fmi2SetInteger(fmi2Component c,
                           const fmi2ValueReference *vr,
                           size_t nvr,
                           const fmi2Integer *value);
 
+// Sets Boolean variables: the model has none that can be set.
 fmi2Status fmi2SetBoolean(fmi2Component c,
                           const fmi2ValueReference *vr,
                           size_t nvr,
                           const fmi2Boolean *value);
 
+// Sets String variables: the model has none.
 fmi2Status fmi2SetString(fmi2Component c,
                          const fmi2ValueReference *vr,
                          size_t nvr,
                          const fmi2String *value);
 
+// Copies the instance state into `*FMUstate` (a new state if it is NULL, else overwritten).
 fmi2Status fmi2GetFMUstate(fmi2Component c,
                            fmi2FMUstate *FMUstate);
 
+// Restores a state made by this instance.
 fmi2Status fmi2SetFMUstate(fmi2Component c,
                            fmi2FMUstate FMUstate);
 
+// Frees `*FMUstate` and sets it to NULL.
 fmi2Status fmi2FreeFMUstate(fmi2Component c,
                             fmi2FMUstate *FMUstate);
 
+// Size (bytes) of the serialized form of a state.
 fmi2Status fmi2SerializedFMUstateSize(fmi2Component c,
                                       fmi2FMUstate FMUstate,
                                       size_t *size);
 
+// Writes the serialized state into `serializedState[0..size]`.
 fmi2Status fmi2SerializeFMUstate(fmi2Component c,
                                  fmi2FMUstate FMUstate,
                                  fmi2Byte *serializedState,
                                  size_t size);
 
+// A state from bytes made by `fmi2SerializeFMUstate` (in any process); corrupt, truncated or
+// foreign bytes are refused.
 fmi2Status fmi2DeSerializeFMUstate(fmi2Component c,
                                    const fmi2Byte *serializedState,
                                    size_t size,
                                    fmi2FMUstate *FMUstate);
 
+// Not provided (`providesDirectionalDerivative="false"`): always refused.
 fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                         const fmi2ValueReference *_vUnknown_ref,
                                         size_t _nUnknown,
@@ -230,41 +258,51 @@ fmi2Status fmi2GetDirectionalDerivative(fmi2Component c,
                                         const fmi2Real *_dvKnown,
                                         fmi2Real *_dvUnknown);
 
+// Derivatives (SI) of the inputs for the next step: `z_in` orders 1..5, `zdot_in` orders 1..4.
 fmi2Status fmi2SetRealInputDerivatives(fmi2Component c,
                                        const fmi2ValueReference *vr,
                                        size_t nvr,
                                        const fmi2Integer *order,
                                        const fmi2Real *value);
 
+// First time derivatives (SI) of `x`, `v`, `z`, `zdot`.
 fmi2Status fmi2GetRealOutputDerivatives(fmi2Component c,
                                         const fmi2ValueReference *vr,
                                         size_t nvr,
                                         const fmi2Integer *order,
                                         fmi2Real *value);
 
+// Integrates from `currentCommunicationPoint` to exactly `currentCommunicationPoint +
+// communicationStepSize` (s), locating every event inside.
 fmi2Status fmi2DoStep(fmi2Component c,
                       fmi2Real currentCommunicationPoint,
                       fmi2Real communicationStepSize,
                       fmi2Boolean _noSetFMUStatePriorToCurrentPoint);
 
+// Steps are synchronous: there is never a step to cancel, so this is refused.
 fmi2Status fmi2CancelStep(fmi2Component c);
 
+// `fmi2DoStepStatus`/`fmi2PendingStatus`: not available (`fmi2Discard`).
 fmi2Status fmi2GetStatus(fmi2Component c,
                          fmi2StatusKind s,
                          fmi2Status *value);
 
+// `fmi2LastSuccessfulTime`: end (s) of the last successful step or of a discarded one.
 fmi2Status fmi2GetRealStatus(fmi2Component c,
                              fmi2StatusKind s,
                              fmi2Real *value);
 
+// No integer status is defined: `fmi2Discard`.
 fmi2Status fmi2GetIntegerStatus(fmi2Component c,
                                 fmi2StatusKind s,
                                 fmi2Integer *value);
 
+// `fmi2Terminated`: whether the FMU asks to end the simulation (after `fmi2Discard`).
 fmi2Status fmi2GetBooleanStatus(fmi2Component c,
                                 fmi2StatusKind s,
                                 fmi2Boolean *value);
 
+// `fmi2PendingStatus`: not available (`fmi2Discard`).
 fmi2Status fmi2GetStringStatus(fmi2Component c,
                                fmi2StatusKind s,
                                fmi2String *value);

@@ -106,16 +106,19 @@ unsafe fn text(p: fmi2String, what: &str) -> Result<String, String> {
 
 // ---- common functions ----
 
+/// `"default"`: the standard FMI 2.0 platform types.
 #[no_mangle]
 pub extern "C" fn fmi2GetTypesPlatform() -> *const c_char {
     c"default".as_ptr()
 }
 
+/// `"2.0"`.
 #[no_mangle]
 pub extern "C" fn fmi2GetVersion() -> *const c_char {
     c"2.0".as_ptr()
 }
 
+/// Switches logging of the listed categories (all of them when `nCategories` is 0) on or off.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetDebugLogging(
     c: fmi2Component,
@@ -177,6 +180,8 @@ unsafe fn instantiate(
     }
 }
 
+/// A new co-simulation instance, or NULL (with a logged reason) for a wrong GUID, FMU type,
+/// name or NULL callbacks. `fmuResourceLocation` and `visible` are not used.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Instantiate(
     instanceName: fmi2String,
@@ -191,6 +196,7 @@ pub unsafe extern "C" fn fmi2Instantiate(
         .unwrap_or(ptr::null_mut())
 }
 
+/// Frees the instance and the FMU states it handed out.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     let _ = catch_unwind(|| {
@@ -201,6 +207,7 @@ pub unsafe extern "C" fn fmi2FreeInstance(c: fmi2Component) {
     });
 }
 
+/// Start time and optional stop time (s); the tolerance is ignored (see the parameter `tol`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetupExperiment(
     c: fmi2Component,
@@ -217,6 +224,7 @@ pub unsafe extern "C" fn fmi2SetupExperiment(
     })
 }
 
+/// Enters initialization mode.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2Status {
     call(
@@ -227,6 +235,8 @@ pub unsafe extern "C" fn fmi2EnterInitializationMode(c: fmi2Component) -> fmi2St
     )
 }
 
+/// Checks the parameters, starts the simulation at the start time (processing the events there)
+/// and enters step mode.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Status {
     call(c, "fmi2ExitInitializationMode", allowed::INIT, |inst| {
@@ -234,6 +244,7 @@ pub unsafe extern "C" fn fmi2ExitInitializationMode(c: fmi2Component) -> fmi2Sta
     })
 }
 
+/// Ends the simulation (values stay readable).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
     call(c, "fmi2Terminate", allowed::TERMINATE, |inst| {
@@ -241,6 +252,7 @@ pub unsafe extern "C" fn fmi2Terminate(c: fmi2Component) -> fmi2Status {
     })
 }
 
+/// Back to the instantiated state with the start values.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
     call(c, "fmi2Reset", allowed::ANY, |inst| inst.reset())
@@ -288,6 +300,7 @@ unsafe fn set_values<T: Copy>(
     })
 }
 
+/// Real values (SI units) of the variables `vr[0..nvr]`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetReal(
     c: fmi2Component,
@@ -298,6 +311,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     get_values(c, "fmi2GetReal", vr, nvr, value, Kind::Real, |v| v)
 }
 
+/// Integer and Enumeration values of the variables `vr[0..nvr]`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetInteger(
     c: fmi2Component,
@@ -310,6 +324,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     })
 }
 
+/// Boolean values (`fmi2True`/`fmi2False`) of the variables `vr[0..nvr]`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetBoolean(
     c: fmi2Component,
@@ -326,6 +341,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     })
 }
 
+/// String values: the model has none, so any value reference is refused.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetString(
     c: fmi2Component,
@@ -338,6 +354,7 @@ pub unsafe extern "C" fn fmi2GetString(
     })
 }
 
+/// Sets Real parameters or inputs (SI units, checked against their ranges; all or none).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetReal(
     c: fmi2Component,
@@ -348,6 +365,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     set_values(c, "fmi2SetReal", vr, nvr, value, Kind::Real, |v| v)
 }
 
+/// Sets Integer or Enumeration parameters (checked against their ranges; all or none).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetInteger(
     c: fmi2Component,
@@ -366,6 +384,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
     )
 }
 
+/// Sets Boolean variables: the model has none that can be set.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetBoolean(
     c: fmi2Component,
@@ -384,6 +403,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
     )
 }
 
+/// Sets String variables: the model has none.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetString(
     c: fmi2Component,
@@ -398,6 +418,7 @@ pub unsafe extern "C" fn fmi2SetString(
 
 // ---- FMU states ----
 
+/// Copies the instance state into `*FMUstate` (a new state if it is NULL, else overwritten).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
@@ -420,6 +441,7 @@ fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot) -> Outcom
     Ok(fmi2OK)
 }
 
+/// Restores a state made by this instance.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
     call(c, "fmi2SetFMUstate", allowed::ANY, |inst| {
@@ -428,6 +450,7 @@ pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstat
     })
 }
 
+/// Frees `*FMUstate` and sets it to NULL.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
@@ -443,6 +466,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     })
 }
 
+/// Size (bytes) of the serialized form of a state.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     c: fmi2Component,
@@ -456,6 +480,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     })
 }
 
+/// Writes the serialized state into `serializedState[0..size]`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SerializeFMUstate(
     c: fmi2Component,
@@ -477,6 +502,8 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     })
 }
 
+/// A state from bytes made by `fmi2SerializeFMUstate` (in any process); corrupt, truncated or
+/// foreign bytes are refused.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     c: fmi2Component,
@@ -493,6 +520,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     })
 }
 
+/// Not provided (`providesDirectionalDerivative="false"`): always refused.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
     c: fmi2Component,
@@ -510,6 +538,7 @@ pub unsafe extern "C" fn fmi2GetDirectionalDerivative(
 
 // ---- co-simulation ----
 
+/// Derivatives (SI) of the inputs for the next step: `z_in` orders 1..5, `zdot_in` orders 1..4.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     c: fmi2Component,
@@ -526,6 +555,7 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     })
 }
 
+/// First time derivatives (SI) of `x`, `v`, `z`, `zdot`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     c: fmi2Component,
@@ -548,6 +578,8 @@ pub unsafe extern "C" fn fmi2GetRealOutputDerivatives(
     )
 }
 
+/// Integrates from `currentCommunicationPoint` to exactly `currentCommunicationPoint +
+/// communicationStepSize` (s), locating every event inside.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2DoStep(
     c: fmi2Component,
@@ -560,6 +592,7 @@ pub unsafe extern "C" fn fmi2DoStep(
     })
 }
 
+/// Steps are synchronous: there is never a step to cancel, so this is refused.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
     call(c, "fmi2CancelStep", allowed::ANY, |_| {
@@ -588,6 +621,7 @@ fn status<T>(
     })
 }
 
+/// `fmi2DoStepStatus`/`fmi2PendingStatus`: not available (`fmi2Discard`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetStatus(
     c: fmi2Component,
@@ -599,6 +633,7 @@ pub unsafe extern "C" fn fmi2GetStatus(
     })
 }
 
+/// `fmi2LastSuccessfulTime`: end (s) of the last successful step or of a discarded one.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetRealStatus(
     c: fmi2Component,
@@ -608,6 +643,7 @@ pub unsafe extern "C" fn fmi2GetRealStatus(
     status(c, "fmi2GetRealStatus", value, |inst| inst.real_status(s))
 }
 
+/// No integer status is defined: `fmi2Discard`.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetIntegerStatus(
     c: fmi2Component,
@@ -619,6 +655,7 @@ pub unsafe extern "C" fn fmi2GetIntegerStatus(
     })
 }
 
+/// `fmi2Terminated`: whether the FMU asks to end the simulation (after `fmi2Discard`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetBooleanStatus(
     c: fmi2Component,
@@ -630,6 +667,7 @@ pub unsafe extern "C" fn fmi2GetBooleanStatus(
     })
 }
 
+/// `fmi2PendingStatus`: not available (`fmi2Discard`).
 #[no_mangle]
 pub unsafe extern "C" fn fmi2GetStringStatus(
     c: fmi2Component,

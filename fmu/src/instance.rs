@@ -108,9 +108,6 @@ pub struct Instance {
     events: Vec<Event>,
 }
 
-// The raw environment pointer is only passed back to the host's logger.
-unsafe impl Send for Instance {}
-
 fn start_values() -> Vec<f64> {
     VARS.iter().map(|v| v.start).collect()
 }

@@ -564,3 +564,39 @@ fn a_step_that_cannot_finish_is_a_discard_with_terminated_status() {
         assert_eq!(fmi2Terminate(f.c), fmi2OK);
     }
 }
+
+#[test]
+fn a_later_start_time_shifts_the_run_and_the_shaker_phase() {
+    let mut reference = Fmu::started(&[]);
+    reference.run(20.0, 0.5);
+    let mut f = Fmu::new();
+    unsafe {
+        assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 100.0, 1, 120.0), fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(f.c), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(f.c), fmi2OK);
+        f.assert_refused(
+            fmi2DoStep(f.c, 0.0, 1.0, 0),
+            "does not match the FMU's time 100",
+        );
+    }
+    f.t = 100.0;
+    f.run(120.0, 0.5);
+    for (a, b) in [
+        (f.real(var::x), reference.real(var::x)),
+        (f.real(var::v), reference.real(var::v)),
+        (
+            f.real(var::last_impact_time) - 100.0,
+            reference.real(var::last_impact_time),
+        ),
+        (
+            f.real(var::last_impact_phase),
+            reference.real(var::last_impact_phase),
+        ),
+    ] {
+        assert!((a - b).abs() < 1e-11, "{a} vs {b}");
+    }
+    assert_eq!(f.int(var::impact_count), reference.int(var::impact_count));
+    // The stop time is enforced.
+    let s = unsafe { fmi2DoStep(f.c, 120.0, 1.0, 0) };
+    f.assert_refused(s, "beyond stopTime = 120");
+}
