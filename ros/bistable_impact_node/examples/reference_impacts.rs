@@ -1,0 +1,50 @@
+//! Reference impact list straight from `bistable-core` (no node code), for the interop tests:
+//! `reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2]` prints
+//! `index,t,phase,x,v_before,v_after,zdot,delta_k,ended_in_sticking` (nondimensional, ζ = 0.02,
+//! e = 0.85, the paper's initial condition), switching the shaker at `T_SWITCH` if given.
+
+use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
+
+fn main() -> Result<(), String> {
+    let args: Vec<f64> = std::env::args()
+        .skip(1)
+        .map(|a| a.parse::<f64>().map_err(|e| format!("'{a}': {e}")))
+        .collect::<Result<_, _>>()?;
+    let (omega, v, t_end, switch) = match args[..] {
+        [omega, v, t_end] => (omega, v, t_end, None),
+        [omega, v, t_end, ts, o2, v2] => (omega, v, t_end, Some((ts, o2, v2))),
+        _ => return Err("usage: reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2]".into()),
+    };
+    let plate = Sinusoid::new(omega, v).map_err(|e| e.to_string())?;
+    let mut sim = Simulator::new(Params::paper(), plate.into(), SolverOptions::default())
+        .map_err(|e| e.to_string())?;
+    let mut events = Vec::new();
+    if let Some((ts, o2, v2)) = switch {
+        events.extend(sim.events_until(ts).map_err(|e| e.to_string())?);
+        sim.set_sinusoid(o2, v2).map_err(|e| e.to_string())?;
+    }
+    events.extend(sim.events_until(t_end).map_err(|e| e.to_string())?);
+    println!("index,t,phase,x,v_before,v_after,zdot,delta_k,ended_in_sticking");
+    for (k, e) in events.iter().enumerate() {
+        if let Event::Impact(i) = e {
+            let sticks = events[k + 1..].iter().find_map(|n| match n {
+                Event::StickStart { impacts, .. } => Some(*impacts == i.index + 1),
+                Event::Impact(_) => Some(false),
+                _ => None,
+            });
+            println!(
+                "{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
+                i.index,
+                i.t,
+                i.phase.unwrap_or(f64::NAN),
+                i.x,
+                i.v_before,
+                i.v_after,
+                i.zdot,
+                i.delta_k,
+                u8::from(sticks == Some(true))
+            );
+        }
+    }
+    Ok(())
+}
