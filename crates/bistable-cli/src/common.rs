@@ -28,18 +28,11 @@ impl Chatter {
     }
 }
 
-/// Model and solver options common to all subcommands (flatten into each subcommand's args).
+/// Damping, restitution, solver and output options shared by every subcommand (flatten into
+/// each subcommand's args; [`CommonArgs`] adds the shaker's `--omega` and `--velocity`).
 #[derive(Debug, Clone, Args)]
 #[command(next_help_heading = "Model and solver options")]
-pub struct CommonArgs {
-    /// Shaker frequency ratio Ω = Ω̂/ω0 (> 0).
-    #[arg(long, value_name = "OMEGA", allow_negative_numbers = true)]
-    pub omega: f64,
-
-    /// Shaker velocity amplitude V = V̂/(ω0·Δx) (>= 0); the plate moves as z = (V/Ω)·sin(Ωτ).
-    #[arg(long, value_name = "V", allow_negative_numbers = true)]
-    pub velocity: f64,
-
+pub struct ModelArgs {
     /// Damping ratio ζ (>= 0).
     #[arg(
         long,
@@ -77,6 +70,30 @@ pub struct CommonArgs {
     pub json: bool,
 }
 
+/// The shaker point `(Ω, V)` and the [`ModelArgs`]: the options of subcommands that work at one
+/// point of the parameter plane.
+#[derive(Debug, Clone, Args)]
+#[command(next_help_heading = "Model and solver options")]
+pub struct CommonArgs {
+    /// Shaker frequency ratio Ω = Ω̂/ω0 (> 0).
+    #[arg(long, value_name = "OMEGA", allow_negative_numbers = true)]
+    pub omega: f64,
+
+    /// Shaker velocity amplitude V = V̂/(ω0·Δx) (>= 0); the plate moves as z = (V/Ω)·sin(Ωτ).
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
+    pub velocity: f64,
+
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+impl CommonArgs {
+    /// Whether to print JSON.
+    pub fn json(&self) -> bool {
+        self.model.json
+    }
+}
+
 /// A validated model: parameters, shaker and solver options.
 #[derive(Debug, Clone, Copy)]
 pub struct Model {
@@ -93,8 +110,13 @@ pub struct Model {
 impl Model {
     /// Validates the common options; the error names the offending option and its range.
     pub fn from_args(args: &CommonArgs) -> Result<Self, CliError> {
-        // Check in the order the options are documented, so the first bad one is reported.
-        let shaker = Sinusoid::new(args.omega, args.velocity)?;
+        Self::new(&args.model, args.omega, args.velocity)
+    }
+
+    /// Validates `--omega`, `--velocity` and the model options, in the order they are
+    /// documented, so the first bad one is reported.
+    pub fn new(args: &ModelArgs, omega: f64, velocity: f64) -> Result<Self, CliError> {
+        let shaker = Sinusoid::new(omega, velocity)?;
         let params = Params::new(args.zeta, args.restitution)?;
         let opts = SolverOptions::new(args.tol, args.chatter.rule())?;
         Ok(Self {
@@ -102,6 +124,14 @@ impl Model {
             shaker,
             opts,
             chatter: args.chatter,
+        })
+    }
+
+    /// The same model at another shaker point `(Ω, V)`.
+    pub fn at(&self, omega: f64, velocity: f64) -> Result<Self, CliError> {
+        Ok(Self {
+            shaker: Sinusoid::new(omega, velocity)?,
+            ..*self
         })
     }
 

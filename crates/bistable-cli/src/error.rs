@@ -35,6 +35,8 @@ pub enum CliError {
     },
     /// The simulator stopped with an error (exit code 1).
     Sim(SimError),
+    /// Part of the work failed (exit code 1); the message says what.
+    Failed(String),
 }
 
 impl CliError {
@@ -87,6 +89,7 @@ impl fmt::Display for CliError {
                 write!(f, "cannot draw '{}': {message}", path.display())
             }
             CliError::Sim(e) => write!(f, "simulation failed: {e}"),
+            CliError::Failed(message) => f.write_str(message),
         }
     }
 }

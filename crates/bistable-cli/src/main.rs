@@ -7,19 +7,37 @@
 //! - `error.rs`: [`error::CliError`] and its exit codes;
 //! - `output.rs`: number formatting, CSV writers, JSON printing;
 //! - `progress.rs`: a progress bar on stderr for long runs;
+//! - `parallel.rs`: work spread over threads, results back in completion order;
 //! - `plot.rs`: PNG figures;
-//! - `simulate.rs`: `bistable simulate`.
+//! - `ranges.rs`: `A:B:N` parameter ranges;
+//! - `simulate.rs`: `bistable simulate`;
+//! - `classify.rs`: `bistable classify` (and the classification record `map` writes);
+//! - `map.rs`: `bistable map`;
+//! - `attractor.rs`: per-cycle maxima, impact phases and section points of a steady state;
+//! - `branches.rs`: periodic-orbit branches along a parameter grid (shooting, continuation);
+//! - `bifurcation.rs`: `bistable bifurcation`;
+//! - `orbit.rs`: `bistable orbit`;
+//! - `thresholds.rs`: `bistable thresholds`.
 //!
 //! To add a subcommand: write `foo.rs` with a `#[derive(clap::Args)] pub struct FooArgs` that has
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
 //! Result<(), CliError>`, then add a variant to [`Command`] and a line to [`main`].
 
+mod attractor;
+mod bifurcation;
+mod branches;
+mod classify;
 mod common;
 mod error;
+mod map;
+mod orbit;
 mod output;
+mod parallel;
 mod plot;
 mod progress;
+mod ranges;
 mod simulate;
+mod thresholds;
 
 use std::process::ExitCode;
 
@@ -53,12 +71,41 @@ enum Command {
         after_long_help = simulate::AFTER_LONG_HELP
     )]
     Simulate(simulate::SimulateArgs),
+
+    /// Classify the response at (Ω, V): intrawell, transient or continuous interwell, period,
+    /// chaos, snap-throughs (JSON).
+    #[command(long_about = classify::LONG_ABOUT, after_help = classify::AFTER_HELP)]
+    Classify(classify::ClassifyCmdArgs),
+
+    /// Response-class map over an Ω × V grid (Fig. 9): parallel, resumable CSV, PNG with the
+    /// thresholds of Eq. 16–18.
+    #[command(long_about = map::LONG_ABOUT, after_help = map::AFTER_HELP)]
+    Map(map::MapArgs),
+
+    /// Bifurcation diagram (Fig. 6/8): max x per shaker cycle and impact phases against Ω or
+    /// V, with periodic-orbit branches.
+    #[command(long_about = bifurcation::LONG_ABOUT, after_help = bifurcation::AFTER_HELP)]
+    Bifurcation(bifurcation::BifurcationArgs),
+
+    /// Periodic orbit by shooting: fixed point, Floquet multipliers, stability; continuation
+    /// in Ω (Fig. 11a).
+    #[command(long_about = orbit::LONG_ABOUT, after_help = orbit::AFTER_HELP)]
+    Orbit(orbit::OrbitArgs),
+
+    /// The velocity thresholds of Eq. 16–18 (single impact, interwell, quasi-static).
+    #[command(long_about = thresholds::LONG_ABOUT)]
+    Thresholds(thresholds::ThresholdsArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match &cli.command {
         Command::Simulate(args) => simulate::run(args),
+        Command::Classify(args) => classify::run(args),
+        Command::Map(args) => map::run(args),
+        Command::Bifurcation(args) => bifurcation::run(args),
+        Command::Orbit(args) => orbit::run(args),
+        Command::Thresholds(args) => thresholds::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

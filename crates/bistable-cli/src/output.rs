@@ -42,6 +42,23 @@ pub enum Field<'a> {
     Empty,
 }
 
+/// Appends `fields` to `line`, comma separated.
+pub fn push_fields(line: &mut String, fields: &[Field<'_>]) {
+    for (i, f) in fields.iter().enumerate() {
+        if i > 0 {
+            line.push(',');
+        }
+        match *f {
+            Field::F(x) => push_num(line, x),
+            Field::I(n) => {
+                let _ = write!(line, "{n}");
+            }
+            Field::S(s) => line.push_str(s),
+            Field::Empty => {}
+        }
+    }
+}
+
 /// A CSV file being written; errors name the file.
 pub struct CsvFile {
     path: PathBuf,
@@ -63,26 +80,35 @@ impl CsvFile {
         Ok(csv)
     }
 
+    /// Opens an existing CSV file for appending rows (its header is not checked here).
+    pub fn append(path: &Path) -> Result<Self, CliError> {
+        let file = std::fs::OpenOptions::new()
+            .append(true)
+            .open(path)
+            .map_err(|e| CliError::io("cannot open", path, e))?;
+        Ok(Self {
+            path: path.to_path_buf(),
+            out: BufWriter::new(file),
+            line: String::with_capacity(256),
+        })
+    }
+
     /// Writes one row.
     pub fn row(&mut self, fields: &[Field<'_>]) -> Result<(), CliError> {
         let mut line = std::mem::take(&mut self.line);
         line.clear();
-        for (i, f) in fields.iter().enumerate() {
-            if i > 0 {
-                line.push(',');
-            }
-            match *f {
-                Field::F(x) => push_num(&mut line, x),
-                Field::I(n) => {
-                    let _ = write!(line, "{n}");
-                }
-                Field::S(s) => line.push_str(s),
-                Field::Empty => {}
-            }
-        }
+        push_fields(&mut line, fields);
         let r = self.write_line(&line);
         self.line = line;
         r
+    }
+
+    /// Pushes the rows written so far to the operating system (so that they survive if the
+    /// process is killed).
+    pub fn flush(&mut self) -> Result<(), CliError> {
+        self.out
+            .flush()
+            .map_err(|e| CliError::io("cannot write", &self.path, e))
     }
 
     fn write_line(&mut self, line: &str) -> Result<(), CliError> {
@@ -94,9 +120,7 @@ impl CsvFile {
 
     /// Flushes the file to disk.
     pub fn finish(mut self) -> Result<PathBuf, CliError> {
-        self.out
-            .flush()
-            .map_err(|e| CliError::io("cannot write", &self.path, e))?;
+        self.flush()?;
         Ok(self.path)
     }
 }

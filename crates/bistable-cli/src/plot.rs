@@ -18,7 +18,7 @@ use crate::common::Model;
 use crate::error::CliError;
 
 const TAU: f64 = std::f64::consts::TAU;
-const FONT: &str = "sans-serif";
+pub(crate) const FONT: &str = "sans-serif";
 
 /// Files tried in order when `$BISTABLE_FONT` is not set.
 const FONT_FILES: &[&str] = &[
@@ -91,10 +91,10 @@ pub struct PlotData {
     pub total_impacts: u64,
 }
 
-type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
-type Chart<'a, 'b> =
+pub(crate) type Area<'a> = DrawingArea<BitMapBackend<'a>, Shift>;
+pub(crate) type Chart<'a, 'b> =
     ChartContext<'a, BitMapBackend<'b>, Cartesian2d<RangedCoordf64, RangedCoordf64>>;
-type DrawResult = Result<(), Box<dyn std::error::Error>>;
+pub(crate) type DrawResult = Result<(), Box<dyn std::error::Error>>;
 /// A figure: file name, size in pixels, drawing function.
 type Figure = (
     &'static str,
@@ -102,7 +102,7 @@ type Figure = (
     fn(&Area<'_>, &PlotData) -> DrawResult,
 );
 
-fn plot_err(path: &Path, e: impl std::fmt::Display) -> CliError {
+pub(crate) fn plot_err(path: &Path, e: impl std::fmt::Display) -> CliError {
     CliError::Plot {
         path: path.to_path_buf(),
         message: e.to_string(),
@@ -153,19 +153,29 @@ pub fn draw_all(dir: &Path, data: &PlotData) -> Result<Vec<PathBuf>, CliError> {
     let mut out = Vec::new();
     for (name, size, draw) in figures {
         let path = dir.join(name);
-        {
-            let root = BitMapBackend::new(&path, size).into_drawing_area();
-            root.fill(&WHITE).map_err(|e| plot_err(&path, e))?;
-            draw(&root, data).map_err(|e| plot_err(&path, e))?;
-            root.present().map_err(|e| plot_err(&path, e))?;
-        }
+        png(&path, size, |root| draw(root, data))?;
         out.push(path);
     }
     Ok(out)
 }
 
+/// Draws one PNG of `size` pixels on a white background with `draw` (creates missing parent
+/// directories; errors name the file).
+pub(crate) fn png(
+    path: &Path,
+    size: (u32, u32),
+    draw: impl FnOnce(&Area<'_>) -> DrawResult,
+) -> Result<(), CliError> {
+    ensure_font().map_err(|e| plot_err(path, e))?;
+    crate::output::create_parent(path)?;
+    let root = BitMapBackend::new(path, size).into_drawing_area();
+    root.fill(&WHITE).map_err(|e| plot_err(path, e))?;
+    draw(&root).map_err(|e| plot_err(path, e))?;
+    root.present().map_err(|e| plot_err(path, e))
+}
+
 /// `(lo, hi)` of the finite values with a relative margin; a small span around a constant.
-fn range(values: impl Iterator<Item = f64>, margin: f64) -> (f64, f64) {
+pub(crate) fn range(values: impl Iterator<Item = f64>, margin: f64) -> (f64, f64) {
     let (lo, hi) = values
         .filter(|v| v.is_finite())
         .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
@@ -183,7 +193,7 @@ fn range(values: impl Iterator<Item = f64>, margin: f64) -> (f64, f64) {
 }
 
 /// Formats an axis label value without trailing zeros (`0.25`, `10`, `-0.05`).
-fn tick(v: &f64) -> String {
+pub(crate) fn tick(v: &f64) -> String {
     let s = format!("{:.6}", v);
     let s = s.trim_end_matches('0').trim_end_matches('.');
     if s == "-0" {
@@ -198,24 +208,26 @@ fn tick(v: &f64) -> String {
 
 /// How a legend entry is drawn.
 #[derive(Clone, Copy)]
-enum Mark {
+pub(crate) enum Mark {
     Line(RGBColor, u32),
     Dashed(RGBColor),
     Dot(RGBColor, i32),
     Ring(RGBColor, i32),
     Band(RGBColor),
+    /// A line with a dark halo, `dash` = (on, off) pixels or solid.
+    Halo(RGBColor, Option<(i32, i32)>),
 }
 
-fn centred(style: TextStyle<'_>) -> TextStyle<'_> {
+pub(crate) fn centred(style: TextStyle<'_>) -> TextStyle<'_> {
     style.pos(Pos::new(HPos::Center, VPos::Center))
 }
 
-fn left(style: TextStyle<'_>) -> TextStyle<'_> {
+pub(crate) fn left(style: TextStyle<'_>) -> TextStyle<'_> {
     style.pos(Pos::new(HPos::Left, VPos::Center))
 }
 
 /// Draws the title, subtitle and legend at the top of `root`; returns the area below.
-fn header<'a>(
+pub(crate) fn header<'a>(
     root: &Area<'a>,
     title: &str,
     subtitle: &str,
@@ -295,14 +307,75 @@ fn draw_mark(area: &Area<'_>, mark: Mark, x: i32, y: i32) -> DrawResult {
             [(x + 2, y - 8), (x + 28, y + 8)],
             c.mix(0.35).filled(),
         ))?,
+        Mark::Halo(c, dash) => {
+            area.draw(&Rectangle::new(
+                [(x - 2, y - 8), (x + 32, y + 8)],
+                RGBColor(150, 150, 150).filled(),
+            ))?;
+            halo_segments(area, &[(x, y), (x + 30, y)], c, dash)?;
+        }
     }
     Ok(())
+}
+
+/// A polyline in pixel coordinates, 2 px wide in `c` over a 4 px dark halo, dashed as
+/// `(on, off)` pixels or solid.
+pub(crate) fn halo_segments(
+    area: &Area<'_>,
+    pts: &[(i32, i32)],
+    c: RGBColor,
+    dash: Option<(i32, i32)>,
+) -> DrawResult {
+    let pieces: Vec<[(i32, i32); 2]> = match dash {
+        None => pts.windows(2).map(|w| [w[0], w[1]]).collect(),
+        Some((on, off)) => dashes(pts, on, off),
+    };
+    for (colour, width) in [(RGBColor(25, 25, 25), 5), (c, 2)] {
+        for seg in &pieces {
+            area.draw(&PathElement::new(seg.to_vec(), colour.stroke_width(width)))?;
+        }
+    }
+    Ok(())
+}
+
+/// Cuts a polyline into dashes of `on` pixels separated by `off` pixels.
+fn dashes(pts: &[(i32, i32)], on: i32, off: i32) -> Vec<[(i32, i32); 2]> {
+    let mut out = Vec::new();
+    let period = f64::from(on + off);
+    let mut walked = 0.0;
+    for w in pts.windows(2) {
+        let (a, b) = (
+            (f64::from(w[0].0), f64::from(w[0].1)),
+            (f64::from(w[1].0), f64::from(w[1].1)),
+        );
+        let len = (b.0 - a.0).hypot(b.1 - a.1);
+        if len == 0.0 {
+            continue;
+        }
+        let at = |d: f64| {
+            let s = (d / len).clamp(0.0, 1.0);
+            (
+                (a.0 + s * (b.0 - a.0)).round() as i32,
+                (a.1 + s * (b.1 - a.1)).round() as i32,
+            )
+        };
+        let mut d = -(walked % period);
+        while d < len {
+            let (s, e) = (d.max(0.0), (d + f64::from(on)).min(len));
+            if e > s {
+                out.push([at(s), at(e)]);
+            }
+            d += period;
+        }
+        walked += len;
+    }
+    out
 }
 
 // ---------------------------------------------------------------------------------------------
 // Chart helpers.
 
-fn chart<'a, 'b>(
+pub(crate) fn chart<'a, 'b>(
     area: &'a Area<'b>,
     x: (f64, f64),
     y: (f64, f64),
@@ -354,7 +427,7 @@ fn thin(chart: &Chart<'_, '_>, pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
 
 /// A polyline `width` pixels wide, drawn as one-pixel lines shifted by whole pixels (plotters'
 /// own wide lines break up into dots on dense curves).
-fn thick_line(
+pub(crate) fn thick_line(
     chart: &mut Chart<'_, '_>,
     pts: &[(f64, f64)],
     color: RGBColor,
@@ -379,7 +452,7 @@ fn thick_line(
     Ok(())
 }
 
-fn hline(chart: &mut Chart<'_, '_>, y: f64, color: RGBColor) -> DrawResult {
+pub(crate) fn hline(chart: &mut Chart<'_, '_>, y: f64, color: RGBColor) -> DrawResult {
     let xr = chart.x_range();
     chart.draw_series(DashedLineSeries::new(
         [(xr.start, y), (xr.end, y)],
@@ -390,7 +463,7 @@ fn hline(chart: &mut Chart<'_, '_>, y: f64, color: RGBColor) -> DrawResult {
     Ok(())
 }
 
-fn vline(chart: &mut Chart<'_, '_>, x: f64, color: RGBColor) -> DrawResult {
+pub(crate) fn vline(chart: &mut Chart<'_, '_>, x: f64, color: RGBColor) -> DrawResult {
     let yr = chart.y_range();
     chart.draw_series(DashedLineSeries::new(
         [(x, yr.start), (x, yr.end)],
@@ -402,7 +475,7 @@ fn vline(chart: &mut Chart<'_, '_>, x: f64, color: RGBColor) -> DrawResult {
 }
 
 /// `1 impact`, `2 impacts`.
-fn plural(n: u64, what: &str) -> String {
+pub(crate) fn plural(n: u64, what: &str) -> String {
     if n == 1 {
         format!("1 {what}")
     } else {

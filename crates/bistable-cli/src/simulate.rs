@@ -687,7 +687,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         steps: sim.stats().steps,
         files,
     };
-    if args.common.json {
+    if args.common.json() {
         print_json(&summary)
     } else {
         print_text(&human(&summary))

@@ -1,0 +1,503 @@
+//! `bistable bifurcation`: Fig. 6/8 style diagrams. For each value of the control parameter
+//! (Ω at fixed V, or V at fixed Ω) the response from the paper's initial condition is run past
+//! a transient, then the largest displacement of every shaker cycle and the phases of the
+//! impacts are recorded; the periodic-orbit branches found by shooting are drawn over them.
+
+use std::path::{Path, PathBuf};
+
+use clap::{ArgGroup, Args, ValueEnum};
+use plotters::prelude::*;
+use serde::Serialize;
+
+use crate::attractor::{detect_period, distinct, steady_cycles, Cycles};
+use crate::branches::{self, Branches, Seed};
+use crate::common::{Model, ModelArgs};
+use crate::error::CliError;
+use crate::output::{print_json, print_text, sibling, CsvFile, Field};
+use crate::parallel;
+use crate::plot::{self, header, Area, DrawResult, Mark};
+use crate::ranges::Range;
+
+/// Long description shown by `bistable bifurcation --help`.
+pub const LONG_ABOUT: &str = "\
+Bifurcation diagram against Ω (at fixed --velocity) or V (at fixed --omega), as
+in the paper's Fig. 6 and 8. For each parameter value (in parallel) the response
+starts from the paper's initial condition, runs --transient shaker periods, and
+then --record shaker periods are recorded:
+
+  max x     the largest displacement in each shaker cycle, from --samples
+            dense-output samples per cycle (at the same plate phases in every
+            cycle, so periodic responses repeat exactly) refined by cubic
+            Hermite interpolation of (x, x') around each turning point;
+  phases    the shaker phase (cycles, [0, 1)) of every impact.
+
+Periodic-orbit branches (unless --no-branches): for each period in
+--branch-periods, orbits are found by shooting (Newton on the p-period map with
+the monodromy matrix from the variational equations) seeded from the simulated
+attractor (its own period, and the orbits it doubled from), then continued from
+point to point in both directions. Stable orbits (all Floquet multipliers inside
+the unit circle) are drawn thick and solid, unstable ones thin and dashed, each
+period in its own colour over the max-x panel.
+
+Prints a summary per point (detected period, number of distinct max-x values,
+impacts per cycle); JSON with --json.";
+
+/// Shown after the options by `bistable bifurcation --help`.
+pub const AFTER_HELP: &str = "\
+CSV (--out FILE.csv): omega,velocity,kind,cycle,value with kind max_x (value:
+largest x in that recorded cycle) or impact_phase (value: phase in cycles of an
+impact in that cycle); cycle counts from 0 at the end of the transient.
+<stem>_orbits.csv next to it: one row per periodic orbit,
+  omega,velocity,period,stable,x0,v0,max_x,cycle_max,multiplier_1_re,
+  multiplier_1_im,multiplier_2_re,multiplier_2_im,abs_multiplier,impacts,
+  snap_throughs,sticks
+(x0, v0: the fixed point at plate phase 0; cycle_max: the largest x of each of
+its cycles, ';'-separated).
+
+Exit codes: 0 success; 2 invalid options; 1 a file could not be written or a
+simulation failed.
+
+Examples:
+  bistable bifurcation --param omega --range 2.0:2.7:141 --velocity 0.07 \\
+      --out out/bif.csv --plot out/bif.png
+  bistable bifurcation --param velocity --range 0.01:0.2:200 --omega 0.85 \\
+      --plot out/bif_v.png";
+
+/// The control parameter.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
+#[serde(rename_all = "lowercase")]
+pub enum Param {
+    /// Ω, at fixed --velocity.
+    Omega,
+    /// V, at fixed --omega.
+    Velocity,
+}
+
+/// Options of `bistable bifurcation`.
+#[derive(Debug, Clone, Args)]
+#[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot", "json"])))]
+pub struct BifurcationArgs {
+    /// Control parameter.
+    #[arg(long, value_enum, value_name = "PARAM")]
+    pub param: Param,
+
+    /// Values of the control parameter, A:B:N (N evenly spaced values, ends included).
+    #[arg(long, value_name = "A:B:N")]
+    pub range: Range,
+
+    /// Fixed Ω when --param velocity (> 0).
+    #[arg(long, value_name = "OMEGA", allow_negative_numbers = true)]
+    pub omega: Option<f64>,
+
+    /// Fixed V when --param omega (>= 0).
+    #[arg(long, value_name = "V", allow_negative_numbers = true)]
+    pub velocity: Option<f64>,
+
+    /// Shaker periods skipped as transient at each point.
+    #[arg(long, value_name = "N", default_value_t = 500)]
+    pub transient: u32,
+
+    /// Shaker periods recorded after the transient (>= 1).
+    #[arg(long, value_name = "N", default_value_t = 100)]
+    pub record: u32,
+
+    /// Dense-output samples per shaker period for the maximum of x (>= 8).
+    #[arg(long, value_name = "N", default_value_t = 128)]
+    pub samples: u32,
+
+    /// Periods (shaker periods) of the orbit branches to find, comma separated.
+    #[arg(
+        long,
+        value_name = "P,P,..",
+        value_delimiter = ',',
+        default_value = "1,2,4,8"
+    )]
+    pub branch_periods: Vec<u32>,
+
+    /// Do not look for periodic orbits.
+    #[arg(long)]
+    pub no_branches: bool,
+
+    /// Write the recorded maxima and impact phases to FILE.csv and the orbits to
+    /// <stem>_orbits.csv next to it.
+    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
+    pub out: Option<PathBuf>,
+
+    /// Draw the diagram to FILE.png.
+    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
+    pub plot: Option<PathBuf>,
+
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+/// The summary of one point.
+#[derive(Debug, Serialize)]
+struct PointSummary {
+    omega: f64,
+    velocity: f64,
+    /// Period of the recorded response in shaker periods (null: none up to 16).
+    period: Option<usize>,
+    /// Distinct values of max x over the recorded cycles (to 1e-6).
+    distinct_max_x: usize,
+    impacts_per_cycle: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct OrbitCount {
+    period: u32,
+    orbits: usize,
+    stable: usize,
+    links: usize,
+}
+
+#[derive(Debug, Serialize)]
+struct Summary {
+    param: Param,
+    range: String,
+    transient: u32,
+    record: u32,
+    points: Vec<PointSummary>,
+    branches: Vec<OrbitCount>,
+    wall_time_s: f64,
+    files: Vec<PathBuf>,
+}
+
+/// Runs `bistable bifurcation`.
+pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
+    let start = std::time::Instant::now();
+    let (models, range) = grid(args)?;
+    if args.record == 0 {
+        return Err(CliError::invalid_text("--record", 0, "must be >= 1"));
+    }
+    if args.samples < 8 {
+        return Err(CliError::invalid_text(
+            "--samples",
+            args.samples,
+            "must be >= 8",
+        ));
+    }
+    if let Some(&p) = args
+        .branch_periods
+        .iter()
+        .find(|&&p| !(1..=64).contains(&p))
+    {
+        return Err(CliError::invalid_text(
+            "--branch-periods",
+            p,
+            "periods must be in [1, 64]",
+        ));
+    }
+    let threads = parallel::threads(args.threads, "--threads")?;
+
+    let mut points: Vec<Option<Cycles>> = vec![None; models.len()];
+    parallel::run(
+        &models,
+        threads,
+        &format!("simulating {} points", models.len()),
+        |m| steady_cycles(m, args.transient, args.record, args.samples),
+        |i, c| {
+            points[i] = Some(c?);
+            Ok(())
+        },
+    )?;
+    let points: Vec<Cycles> = points.into_iter().flatten().collect();
+    let periods: Vec<Option<usize>> = points
+        .iter()
+        .map(|c| detect_period(&c.sections, 16, 1e-7))
+        .collect();
+
+    let branches = if args.no_branches || args.branch_periods.is_empty() {
+        Vec::new()
+    } else {
+        let seeds: Vec<Seed> = points
+            .iter()
+            .zip(&periods)
+            .enumerate()
+            .flat_map(|(i, (c, &p))| branches::seeds_from(i, &c.sections, p, &args.branch_periods))
+            .collect();
+        branches::build(&models, &args.branch_periods, &seeds, threads)?
+    };
+
+    let mut files = Vec::new();
+    if let Some(path) = &args.out {
+        files.extend(write_csv(path, &models, &points, &branches)?);
+    }
+    let xs: Vec<f64> = range.values();
+    if let Some(path) = &args.plot {
+        plot::png(path, (1500, 1250), |root| {
+            draw(root, args, &models, &xs, &points, &branches)
+        })?;
+        files.push(path.clone());
+    }
+    let summary = Summary {
+        param: args.param,
+        range: range.to_string(),
+        transient: args.transient,
+        record: args.record,
+        points: models
+            .iter()
+            .zip(&points)
+            .zip(&periods)
+            .map(|((m, c), &period)| PointSummary {
+                omega: m.omega(),
+                velocity: m.velocity(),
+                period,
+                distinct_max_x: distinct(&c.max_x, 1e-6),
+                impacts_per_cycle: c.impacts.len() as f64 / f64::from(args.record),
+            })
+            .collect(),
+        branches: branches
+            .iter()
+            .map(|b| OrbitCount {
+                period: b.period,
+                orbits: b.len(),
+                stable: b.slots.iter().flatten().filter(|o| o.orbit.stable).count(),
+                links: b.links.len(),
+            })
+            .collect(),
+        wall_time_s: start.elapsed().as_secs_f64(),
+        files,
+    };
+    if args.model.json {
+        print_json(&summary)
+    } else {
+        print_text(&human(&summary))
+    }
+}
+
+/// The models along the range, with the fixed parameter checked.
+fn grid(args: &BifurcationArgs) -> Result<(Vec<Model>, Range), CliError> {
+    let (range, fixed, fixed_name) = match args.param {
+        Param::Omega => (
+            args.range.check("--range", |w| w > 0.0, "Ω must be > 0")?,
+            args.velocity,
+            "--velocity",
+        ),
+        Param::Velocity => (
+            args.range
+                .check("--range", |v| v >= 0.0, "V must be >= 0")?,
+            args.omega,
+            "--omega",
+        ),
+    };
+    let fixed = fixed.ok_or_else(|| {
+        CliError::invalid_text(
+            fixed_name,
+            "(missing)",
+            format!(
+                "is required with --param {}",
+                match args.param {
+                    Param::Omega => "omega",
+                    Param::Velocity => "velocity",
+                }
+            ),
+        )
+    })?;
+    let models = range
+        .values()
+        .into_iter()
+        .map(|p| match args.param {
+            Param::Omega => Model::new(&args.model, p, fixed),
+            Param::Velocity => Model::new(&args.model, fixed, p),
+        })
+        .collect::<Result<Vec<_>, _>>()?;
+    Ok((models, range))
+}
+
+fn write_csv(
+    path: &Path,
+    models: &[Model],
+    points: &[Cycles],
+    branches: &[Branches],
+) -> Result<Vec<PathBuf>, CliError> {
+    let mut csv = CsvFile::create(path, "omega,velocity,kind,cycle,value")?;
+    for (m, c) in models.iter().zip(points) {
+        let (w, v) = (Field::F(m.omega()), Field::F(m.velocity()));
+        for (k, &x) in c.max_x.iter().enumerate() {
+            csv.row(&[w, v, Field::S("max_x"), Field::I(k as u64), Field::F(x)])?;
+        }
+        for &(k, ph) in &c.impacts {
+            csv.row(&[
+                w,
+                v,
+                Field::S("impact_phase"),
+                Field::I(u64::from(k)),
+                Field::F(ph),
+            ])?;
+        }
+    }
+    let mut files = vec![csv.finish()?];
+    if !branches.is_empty() {
+        let mut orbits = CsvFile::create(&sibling(path, "_orbits.csv"), branches::CSV_HEADER)?;
+        branches::write_csv(&mut orbits, branches)?;
+        files.push(orbits.finish()?);
+    }
+    Ok(files)
+}
+
+fn human(s: &Summary) -> String {
+    let mut text = format!(
+        "bifurcation diagram over {} = {} ({} transient + {} recorded shaker periods per \
+         point, {:.1} s)\n",
+        match s.param {
+            Param::Omega => "Ω",
+            Param::Velocity => "V",
+        },
+        s.range,
+        s.transient,
+        s.record,
+        s.wall_time_s
+    );
+    // Runs of equal period.
+    let mut i = 0;
+    while i < s.points.len() {
+        let p = s.points[i].period;
+        let j = (i..s.points.len())
+            .find(|&j| s.points[j].period != p)
+            .unwrap_or(s.points.len());
+        let value = |k: usize| match s.param {
+            Param::Omega => s.points[k].omega,
+            Param::Velocity => s.points[k].velocity,
+        };
+        text.push_str(&format!(
+            "  {:>9.5} .. {:<9.5}  {}\n",
+            value(i),
+            value(j - 1),
+            match p {
+                Some(p) => format!("period {p}"),
+                None => "no period <= 16".to_string(),
+            }
+        ));
+        i = j;
+    }
+    for b in &s.branches {
+        text.push_str(&format!(
+            "  P-{} orbits: {} ({} stable), {} continuation links\n",
+            b.period, b.orbits, b.stable, b.links
+        ));
+    }
+    for f in &s.files {
+        text.push_str(&format!("wrote {}\n", f.display()));
+    }
+    text
+}
+
+/// Colour of the branches of period `p`.
+pub fn period_colour(p: u32) -> RGBColor {
+    match p {
+        1 => RGBColor(215, 40, 40),
+        2 => RGBColor(30, 150, 60),
+        4 => RGBColor(40, 90, 220),
+        8 => RGBColor(230, 140, 0),
+        _ => RGBColor(160, 50, 170),
+    }
+}
+
+const DOTS: RGBColor = RGBColor(20, 20, 20);
+
+fn draw(
+    root: &Area<'_>,
+    args: &BifurcationArgs,
+    models: &[Model],
+    xs: &[f64],
+    points: &[Cycles],
+    branches: &[Branches],
+) -> DrawResult {
+    let m0 = &models[0];
+    let (pname, xdesc, fixed) = match args.param {
+        Param::Omega => (
+            "Ω",
+            "shaker frequency ratio Ω (units of ω0)",
+            format!("V = {}", m0.velocity()),
+        ),
+        Param::Velocity => (
+            "V",
+            "shaker velocity amplitude V (units of ω0·Δx)",
+            format!("Ω = {}", m0.omega()),
+        ),
+    };
+    let mut legend = vec![(Mark::Dot(DOTS, 3), "simulated response".to_string())];
+    for b in branches.iter().filter(|b| b.len() > 0) {
+        legend.push((
+            Mark::Line(period_colour(b.period), 3),
+            format!("P-{} orbits, stable", b.period),
+        ));
+        legend.push((
+            Mark::Dashed(period_colour(b.period)),
+            format!("P-{} unstable", b.period),
+        ));
+    }
+    let area = header(
+        root,
+        &format!(
+            "Bifurcation diagram against {pname} — {fixed}, ζ = {}, e = {}",
+            m0.params.zeta(),
+            m0.restitution()
+        ),
+        &format!(
+            "{} points; per point: {} shaker periods of transient from rest at x = 0, then {} \
+             recorded; orbits by shooting",
+            xs.len(),
+            args.transient,
+            args.record
+        ),
+        &legend,
+    )?;
+    let (_, h) = area.dim_in_pixel();
+    let (upper, lower) = area.split_vertically(h * 58 / 100);
+    let (x0, x1) = plot::range(xs.iter().copied(), 0.01);
+    let (y0, y1) = plot::range(
+        points.iter().flat_map(|c| c.max_x.iter().copied()).chain(
+            branches
+                .iter()
+                .flat_map(|b| b.slots.iter().flatten())
+                .flat_map(|o| o.cycle_max.iter().copied()),
+        ),
+        0.05,
+    );
+    let mut chart = plot::chart(
+        &upper,
+        (x0, x1),
+        (y0, y1),
+        xdesc,
+        "max x per shaker cycle (units of Δx)",
+        Some("largest displacement in each recorded shaker cycle"),
+    )?;
+    if y0 < 0.5 && y1 > 0.5 {
+        plot::hline(&mut chart, 0.5, RGBColor(90, 90, 90))?;
+    }
+    dots(
+        &mut chart,
+        xs.iter()
+            .zip(points)
+            .flat_map(|(&x, c)| c.max_x.iter().map(move |&y| (x, y))),
+    )?;
+    for b in branches {
+        branches::draw(&mut chart, b, xs, period_colour(b.period))?;
+    }
+    let mut chart = plot::chart(
+        &lower,
+        (x0, x1),
+        (0.0, 1.0),
+        xdesc,
+        "impact phase φ/2π (cycles)",
+        Some("phases of the impacts in the recorded cycles"),
+    )?;
+    dots(
+        &mut chart,
+        xs.iter()
+            .zip(points)
+            .flat_map(|(&x, c)| c.impacts.iter().map(move |&(_, ph)| (x, ph))),
+    )?;
+    Ok(())
+}
+
+fn dots(chart: &mut plot::Chart<'_, '_>, pts: impl Iterator<Item = (f64, f64)>) -> DrawResult {
+    chart.draw_series(pts.map(|p| Circle::new(p, 1, DOTS.mix(0.8).filled())))?;
+    Ok(())
+}

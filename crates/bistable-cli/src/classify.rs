@@ -1,0 +1,327 @@
+//! `bistable classify`: the response class at one point `(Ω, V)` (paper Sec. 3.4), and the
+//! classification options and record shared with `bistable map`.
+
+use std::time::Instant as WallClock;
+
+use clap::Args;
+use serde::Serialize;
+
+use bistable_core::{Classification, ClassifyOptions};
+
+use crate::common::{CommonArgs, Model};
+use crate::error::CliError;
+use crate::output::{print_json, Field};
+
+/// Long description shown by `bistable classify --help`.
+pub const LONG_ABOUT: &str = "\
+Classify the response at one shaker point (Ω, V) from the paper's initial
+condition (mass at rest at x = 0, impact 0 at τ = 0), as in the paper's Fig. 9:
+
+  intrawell             never crosses the barrier x = 1/2
+  transient_interwell   crosses only during the transient; the steady state
+                        lies in one well (often at rest in well 2)
+  continuous_interwell  the steady-state orbit itself crosses the barrier
+
+and the steady-state period in shaker periods 2π/Ω (null when aperiodic).
+
+The run is sampled once per shaker period (plate phase 0) and stops as soon as
+the class is decided: the section points repeat with some period p <= 16 over
+max(3p, 8) periods and keep converging, or the mass is at rest in well 2 below
+the barrier and above the plate's reach. Otherwise it runs the full
+--max-periods natural periods (paper: 20,000) and is aperiodic; the largest
+Lyapunov exponent (per unit of τ, from the variational equations with saltation
+matrices at impacts) over the next --lyapunov-periods shaker periods tells
+whether it is chaotic (> 1e-3).
+
+Always prints one JSON object (--json is accepted and changes nothing):
+  class, period, chaotic, lyapunov, snap_throughs, final_well (1 | 2),
+  at_rest_in_second_well, impacts_per_period, sticking, periods_simulated
+  (natural periods τ/2π), stopped_early, wall_time_s, and the inputs omega,
+  velocity, zeta, restitution.";
+
+/// Shown after the options by `bistable classify --help`.
+pub const AFTER_HELP: &str = "\
+Exit codes: 0 success; 2 invalid options; 1 the simulation failed.
+
+Examples:
+  bistable classify --omega 0.85 --velocity 0.11     # intrawell, period 4
+  bistable classify --omega 0.85 --velocity 0.15     # at rest in well 2
+  bistable classify --omega 2.45 --velocity 0.07     # chaotic
+  bistable classify --omega 0.85 --velocity 0.11 --full --max-periods 5000";
+
+/// How long and how carefully to classify (shared by `classify` and `map`).
+#[derive(Debug, Clone, Args)]
+#[command(next_help_heading = "Classification")]
+pub struct ClassifyArgs {
+    /// Longest run, in natural periods τ/2π (the paper: 20,000).
+    #[arg(long, value_name = "N", default_value_t = 20_000.0)]
+    pub max_periods: f64,
+
+    /// Always run the full --max-periods (no early stop); the class is then decided on the
+    /// final sections.
+    #[arg(long)]
+    pub full: bool,
+
+    /// Largest steady-state period looked for, in shaker periods (1..=64; longer periods
+    /// count as aperiodic).
+    #[arg(long, value_name = "P", default_value_t = 16)]
+    pub max_period: u32,
+
+    /// Relative agreement of section points p periods apart that counts as periodic
+    /// (in (0, 1e-3]).
+    #[arg(long, value_name = "TOL", default_value_t = 1e-8)]
+    pub period_tol: f64,
+
+    /// Shaker periods averaged for the Lyapunov exponent of an aperiodic response
+    /// [default: 2000 for classify, 300 for map (throughput)].
+    #[arg(long, value_name = "N")]
+    pub lyapunov_periods: Option<u32>,
+}
+
+impl ClassifyArgs {
+    /// Validated core options; `lyapunov_default` applies when `--lyapunov-periods` is absent.
+    pub fn options(&self, lyapunov_default: u32) -> Result<ClassifyOptions, CliError> {
+        let p = self.max_periods;
+        if !(1.0..=1e8).contains(&p) {
+            return Err(CliError::invalid("--max-periods", p, "must be in [1, 1e8]"));
+        }
+        if !(1..=64).contains(&self.max_period) {
+            return Err(CliError::invalid_text(
+                "--max-period",
+                self.max_period,
+                "must be in [1, 64]",
+            ));
+        }
+        let t = self.period_tol;
+        if !(t.is_finite() && t > 0.0 && t <= 1e-3) {
+            return Err(CliError::invalid("--period-tol", t, "must be in (0, 1e-3]"));
+        }
+        let lyapunov_periods = self.lyapunov_periods.unwrap_or(lyapunov_default);
+        if lyapunov_periods == 0 {
+            return Err(CliError::invalid_text(
+                "--lyapunov-periods",
+                0,
+                "must be >= 1",
+            ));
+        }
+        Ok(ClassifyOptions {
+            max_natural_periods: p,
+            full_length: self.full,
+            max_period: self.max_period,
+            period_tol: t,
+            lyapunov_periods,
+        })
+    }
+}
+
+/// Options of `bistable classify`.
+#[derive(Debug, Clone, Args)]
+pub struct ClassifyCmdArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+
+    #[command(flatten)]
+    pub classify: ClassifyArgs,
+}
+
+/// One classified point: what `classify` prints and what `map` writes per row.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Record {
+    /// `Ω`.
+    pub omega: f64,
+    /// `V`.
+    pub velocity: f64,
+    /// `ζ`.
+    pub zeta: f64,
+    /// `e`.
+    pub restitution: f64,
+    /// `intrawell`, `transient_interwell` or `continuous_interwell`.
+    pub class: String,
+    /// Steady-state period in shaker periods; `None` when aperiodic.
+    pub period: Option<u32>,
+    /// Aperiodic with a positive largest Lyapunov exponent.
+    pub chaotic: bool,
+    /// Largest Lyapunov exponent (per unit of τ) of an aperiodic response.
+    pub lyapunov: Option<f64>,
+    /// Barrier crossings over the whole run.
+    pub snap_throughs: u64,
+    /// 1 or 2.
+    pub final_well: u8,
+    /// Converged to rest at the second equilibrium.
+    pub at_rest_in_second_well: bool,
+    /// Impacts per steady-state period.
+    pub impacts_per_period: Option<u64>,
+    /// The steady state includes sticking.
+    pub sticking: bool,
+    /// Natural periods simulated.
+    pub periods_simulated: f64,
+    /// Stopped before the full length.
+    pub stopped_early: bool,
+    /// Wall-clock time of this point.
+    pub wall_time_s: f64,
+}
+
+/// Column names of [`Record`] in CSV files, in order.
+pub const CSV_COLUMNS: [&str; 16] = [
+    "omega",
+    "velocity",
+    "zeta",
+    "restitution",
+    "class",
+    "period",
+    "chaotic",
+    "lyapunov",
+    "snap_throughs",
+    "final_well",
+    "at_rest_in_second_well",
+    "impacts_per_period",
+    "sticking",
+    "periods_simulated",
+    "stopped_early",
+    "wall_time_s",
+];
+
+impl Record {
+    /// The record of a classification at `model`'s point.
+    pub fn new(model: &Model, c: &Classification, wall_time_s: f64) -> Self {
+        Self {
+            omega: model.omega(),
+            velocity: model.velocity(),
+            zeta: model.params.zeta(),
+            restitution: model.restitution(),
+            class: c.class.name().to_string(),
+            period: c.period,
+            chaotic: c.chaotic,
+            lyapunov: c.lyapunov,
+            snap_throughs: c.snap_throughs,
+            final_well: c.final_well.number(),
+            at_rest_in_second_well: c.at_rest_in_second_well,
+            impacts_per_period: c.impacts_per_period,
+            sticking: c.sticking,
+            periods_simulated: c.periods_simulated,
+            stopped_early: c.stopped_early,
+            wall_time_s,
+        }
+    }
+
+    /// Classifies `model`'s point and times it.
+    pub fn classify(model: &Model, co: ClassifyOptions) -> Result<Self, CliError> {
+        let start = WallClock::now();
+        let c = bistable_core::classify(model.params, model.shaker, model.opts, co)?;
+        Ok(Self::new(model, &c, start.elapsed().as_secs_f64()))
+    }
+
+    /// The CSV fields, in the order of [`CSV_COLUMNS`].
+    pub fn fields(&self) -> [Field<'_>; 16] {
+        let opt_i = |v: Option<u64>| v.map_or(Field::Empty, Field::I);
+        let b = |v: bool| Field::S(if v { "true" } else { "false" });
+        [
+            Field::F(self.omega),
+            Field::F(self.velocity),
+            Field::F(self.zeta),
+            Field::F(self.restitution),
+            Field::S(&self.class),
+            opt_i(self.period.map(u64::from)),
+            b(self.chaotic),
+            self.lyapunov.map_or(Field::Empty, Field::F),
+            Field::I(self.snap_throughs),
+            Field::I(u64::from(self.final_well)),
+            b(self.at_rest_in_second_well),
+            opt_i(self.impacts_per_period),
+            b(self.sticking),
+            Field::F(self.periods_simulated),
+            b(self.stopped_early),
+            Field::F(self.wall_time_s),
+        ]
+    }
+
+    /// Parses a CSV row written with [`Record::fields`] (columns as in [`CSV_COLUMNS`]).
+    pub fn from_csv(cells: &[&str]) -> Result<Self, String> {
+        if cells.len() != CSV_COLUMNS.len() {
+            return Err(format!(
+                "{} fields, expected {}",
+                cells.len(),
+                CSV_COLUMNS.len()
+            ));
+        }
+        fn parse<T: std::str::FromStr>(cells: &[&str], i: usize) -> Result<T, String> {
+            cells[i]
+                .parse()
+                .map_err(|_| format!("bad {} '{}'", CSV_COLUMNS[i], cells[i]))
+        }
+        fn opt<T: std::str::FromStr>(cells: &[&str], i: usize) -> Result<Option<T>, String> {
+            if cells[i].is_empty() {
+                Ok(None)
+            } else {
+                parse(cells, i).map(Some)
+            }
+        }
+        let class = cells[4];
+        if !["intrawell", "transient_interwell", "continuous_interwell"].contains(&class) {
+            return Err(format!("bad class '{class}'"));
+        }
+        Ok(Self {
+            omega: parse(cells, 0)?,
+            velocity: parse(cells, 1)?,
+            zeta: parse(cells, 2)?,
+            restitution: parse(cells, 3)?,
+            class: class.to_string(),
+            period: opt(cells, 5)?,
+            chaotic: parse(cells, 6)?,
+            lyapunov: opt(cells, 7)?,
+            snap_throughs: parse(cells, 8)?,
+            final_well: parse(cells, 9)?,
+            at_rest_in_second_well: parse(cells, 10)?,
+            impacts_per_period: opt(cells, 11)?,
+            sticking: parse(cells, 12)?,
+            periods_simulated: parse(cells, 13)?,
+            stopped_early: parse(cells, 14)?,
+            wall_time_s: parse(cells, 15)?,
+        })
+    }
+}
+
+/// Runs `bistable classify`.
+pub fn run(args: &ClassifyCmdArgs) -> Result<(), CliError> {
+    let model = Model::from_args(&args.common)?;
+    let co = args
+        .classify
+        .options(ClassifyOptions::default().lyapunov_periods)?;
+    print_json(&Record::classify(&model, co)?)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::push_fields;
+
+    #[test]
+    fn csv_row_round_trips() {
+        let r = Record {
+            omega: 0.85,
+            velocity: 1.0 / 3.0,
+            zeta: 0.02,
+            restitution: 0.7,
+            class: "transient_interwell".into(),
+            period: None,
+            chaotic: true,
+            lyapunov: Some(0.0123),
+            snap_throughs: 17,
+            final_well: 2,
+            at_rest_in_second_well: false,
+            impacts_per_period: None,
+            sticking: false,
+            periods_simulated: 20000.5,
+            stopped_early: false,
+            wall_time_s: 1.5e-3,
+        };
+        let mut line = String::new();
+        push_fields(&mut line, &r.fields());
+        let cells: Vec<&str> = line.split(',').collect();
+        assert_eq!(Record::from_csv(&cells).unwrap(), r);
+        assert!(Record::from_csv(&cells[1..]).is_err());
+        let mut bad = cells.clone();
+        bad[4] = "sideways";
+        assert!(Record::from_csv(&bad).is_err());
+    }
+}

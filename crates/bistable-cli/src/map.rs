@@ -1,0 +1,713 @@
+//! `bistable map`: the response-class map of the paper's Fig. 9 over an `Ω × V` grid, computed
+//! in parallel, written row by row to a resumable CSV file and drawn as a PNG.
+
+use std::collections::{HashMap, HashSet};
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::time::Instant as WallClock;
+
+use clap::{ArgGroup, Args};
+use plotters::prelude::*;
+use serde::Serialize;
+
+use bistable_core::ClassifyOptions;
+
+use crate::classify::{ClassifyArgs, Record, CSV_COLUMNS};
+use crate::common::{Model, ModelArgs};
+use crate::error::CliError;
+use crate::output::{print_json, print_text, CsvFile};
+use crate::parallel;
+use crate::plot::{self, halo_segments, header, Area, DrawResult, Mark, FONT};
+use crate::ranges::{Range, MAX_POINTS};
+use crate::thresholds::{quasi_static, Thresholds};
+
+/// Lyapunov periods of an aperiodic point in a map unless `--lyapunov-periods` says otherwise.
+const MAP_LYAPUNOV_PERIODS: u32 = 300;
+
+/// Long description shown by `bistable map --help`.
+pub const LONG_ABOUT: &str = "\
+Classify every point of an Ω × V grid (the paper's Fig. 9) in parallel, as
+'bistable classify' does for one point, and write one CSV row per point and a
+PNG of the map.
+
+Each point starts from the paper's initial condition and runs until its class is
+decided, at most --max-periods natural periods (20,000). To keep a large map
+fast, the largest Lyapunov exponent of an aperiodic point (which decides
+'chaotic') is averaged over 300 shaker periods instead of classify's 2000; set
+--lyapunov-periods to change it.
+
+Resuming: rows are appended and flushed as points complete (in an interleaved
+order that covers the whole grid early), so an interrupted run loses only the
+points in progress. Run the same command again and the points already in
+--out (same Ω and V to the last bit) are skipped; rows written with another ζ or
+e are refused. The plot always shows every grid point found in the file.";
+
+/// Shown after the options by `bistable map --help`.
+pub const AFTER_HELP: &str = "\
+CSV (--out): header and one row per point, in completion order:
+  omega,velocity,zeta,restitution,class,period,chaotic,lyapunov,snap_throughs,
+  final_well,at_rest_in_second_well,impacts_per_period,sticking,
+  periods_simulated,stopped_early,wall_time_s
+  (the keys of 'bistable classify'; empty period, lyapunov, impacts_per_period
+  mean null).
+
+PNG (--plot): the paper's colour logic. Hue by the number of snap-throughs over
+the whole run: blue none, green one, orange several; shade by steady-state
+period, dark P-1 to light P-6+ (periods 7..16). Black: chaotic (aperiodic, λ >
+1e-3); grey: aperiodic but not chaotic; purple: converged to rest at the second
+equilibrium x = 1. Lines: the thresholds of Eq. 16–18, single impact
+V = 1/(4(1+e)), interwell V = (1−e)/(2(1+e)), quasi-static V = Ω/2.
+
+Prints a summary (points, wall time, points per second, share of points that
+ran the full --max-periods); JSON with --json.
+
+Exit codes: 0 success; 2 invalid options or a --out file that does not fit;
+1 a file could not be written, or some points failed (listed on stderr; the
+others are saved).
+
+Examples:
+  bistable map --omega-range 0.2:3.5:60 --velocity-range 0.005:0.2:40 \\
+      --out out/map.csv --plot out/map.png
+  bistable map --restitution 0.7 --out out/map_e07.csv --plot out/map_e07.png";
+
+/// Options of `bistable map`.
+#[derive(Debug, Clone, Args)]
+#[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot"])))]
+pub struct MapArgs {
+    /// Ω values A:B:N (N evenly spaced values from A to B, ends included; Ω > 0).
+    #[arg(long, value_name = "A:B:N", default_value = "0.2:3.5:300")]
+    pub omega_range: Range,
+
+    /// V values A:B:N (V >= 0; the paper's map is V ∈ (0, 0.2]).
+    #[arg(long, value_name = "A:B:N", default_value = "0.001:0.2:200")]
+    pub velocity_range: Range,
+
+    /// Append one row per point to FILE.csv, skipping points already in it (see below).
+    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
+    pub out: Option<PathBuf>,
+
+    /// Draw the map to FILE.png.
+    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
+    pub plot: Option<PathBuf>,
+
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+
+    #[command(flatten)]
+    pub classify: ClassifyArgs,
+
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+/// What `map` prints at the end.
+#[derive(Debug, Serialize)]
+struct Summary {
+    omega_range: String,
+    velocity_range: String,
+    restitution: f64,
+    zeta: f64,
+    points: usize,
+    computed: usize,
+    resumed: usize,
+    failed: usize,
+    threads: usize,
+    wall_time_s: f64,
+    points_per_second: f64,
+    /// Sum of the points' own wall times (≈ CPU time).
+    point_time_s: f64,
+    /// Share of the grid's points that ran the full `--max-periods`.
+    full_length_share: f64,
+    counts: HashMap<String, usize>,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+}
+
+type Key = (u64, u64);
+
+fn key(omega: f64, velocity: f64) -> Key {
+    (omega.to_bits(), velocity.to_bits())
+}
+
+/// Runs `bistable map`.
+pub fn run(args: &MapArgs) -> Result<(), CliError> {
+    let omegas = args
+        .omega_range
+        .check("--omega-range", |w| w > 0.0, "Ω must be > 0")?;
+    let vs = args
+        .velocity_range
+        .check("--velocity-range", |v| v >= 0.0, "V must be >= 0")?;
+    if omegas.n.saturating_mul(vs.n) > MAX_POINTS {
+        return Err(CliError::invalid_text(
+            "--omega-range",
+            omegas,
+            format!("the grid has more than {MAX_POINTS} points"),
+        ));
+    }
+    let model = Model::new(&args.model, omegas.start, vs.start)?;
+    let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;
+    let threads = parallel::threads(args.threads, "--threads")?;
+
+    let mut done: HashMap<Key, Record> = HashMap::new();
+    if let Some(out) = &args.out {
+        for r in read_existing(out, &model)? {
+            done.insert(key(r.omega, r.velocity), r);
+        }
+    }
+    let grid: Vec<(f64, f64)> = interleaved(omegas.n * vs.n)
+        .map(|k| (omegas.value(k % omegas.n), vs.value(k / omegas.n)))
+        .collect();
+    let in_grid: HashSet<Key> = grid.iter().map(|&(w, v)| key(w, v)).collect();
+    let resumed = done.keys().filter(|k| in_grid.contains(k)).count();
+    let todo: Vec<(f64, f64)> = grid
+        .iter()
+        .copied()
+        .filter(|&(w, v)| !done.contains_key(&key(w, v)))
+        .collect();
+
+    let start = WallClock::now();
+    let (computed, failed) = compute(&todo, &model, co, threads, args.out.as_deref(), |r| {
+        done.insert(key(r.omega, r.velocity), r);
+    })?;
+    let wall = start.elapsed().as_secs_f64();
+
+    let records: Vec<&Record> = grid
+        .iter()
+        .filter_map(|&(w, v)| done.get(&key(w, v)))
+        .collect();
+    if let Some(path) = &args.plot {
+        draw(path, &model, omegas, vs, &records, &failed, co)?;
+    }
+    let mut counts: HashMap<String, usize> = HashMap::new();
+    for r in &records {
+        *counts.entry(category(r).label()).or_default() += 1;
+    }
+    let summary = Summary {
+        omega_range: omegas.to_string(),
+        velocity_range: vs.to_string(),
+        restitution: model.restitution(),
+        zeta: model.params.zeta(),
+        points: grid.len(),
+        computed,
+        resumed,
+        failed: failed.len(),
+        threads,
+        wall_time_s: wall,
+        points_per_second: if wall > 0.0 {
+            computed as f64 / wall
+        } else {
+            0.0
+        },
+        point_time_s: records.iter().map(|r| r.wall_time_s).sum(),
+        full_length_share: if records.is_empty() {
+            0.0
+        } else {
+            records.iter().filter(|r| !r.stopped_early).count() as f64 / records.len() as f64
+        },
+        counts,
+        out: args.out.clone(),
+        plot: args.plot.clone(),
+    };
+    if args.model.json {
+        print_json(&summary)?;
+    } else {
+        print_text(&human(&summary))?;
+    }
+    if !failed.is_empty() {
+        return Err(CliError::Failed(format!(
+            "{} of {} points failed (listed above); the others are saved",
+            failed.len(),
+            todo.len()
+        )));
+    }
+    Ok(())
+}
+
+/// The indices `0..n` in an order that spreads over the whole range early (a stride coprime
+/// with `n` near `n/φ`), so partial results and the ETA are representative.
+fn interleaved(n: usize) -> impl Iterator<Item = usize> {
+    let mut stride = ((n as f64) * 0.618_033_988_749_894_9) as usize;
+    stride = stride.max(1);
+    while gcd(stride, n) != 1 {
+        stride += 1;
+    }
+    (0..n).map(move |k| ((k as u128 * stride as u128) % n as u128) as usize)
+}
+
+fn gcd(mut a: usize, mut b: usize) -> usize {
+    while b != 0 {
+        (a, b) = (b, a % b);
+    }
+    a
+}
+
+/// The rows already in `path` (none if it does not exist). Drops an incomplete last line (an
+/// interrupted write) from the file; refuses a file with another header or other `ζ`, `e`.
+fn read_existing(path: &Path, model: &Model) -> Result<Vec<Record>, CliError> {
+    let file = match std::fs::File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(CliError::io("cannot read", path, e)),
+    };
+    let bad = |rule: String| CliError::invalid_text("--out", path.display(), rule);
+    let mut reader = BufReader::new(file);
+    let mut records = Vec::new();
+    let mut line = String::new();
+    let mut complete_len = 0u64;
+    let mut first = true;
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|e| CliError::io("cannot read", path, e))?;
+        if n == 0 || !line.ends_with('\n') {
+            break;
+        }
+        let text = line.trim_end();
+        if first {
+            first = false;
+            if text != CSV_COLUMNS.join(",") {
+                return Err(bad(format!(
+                    "is not a map file (its header is not {})",
+                    CSV_COLUMNS.join(",")
+                )));
+            }
+        } else if !text.is_empty() {
+            let cells: Vec<&str> = text.split(',').collect();
+            let r = Record::from_csv(&cells)
+                .map_err(|e| bad(format!("has a bad row {}: {e}", records.len() + 2)))?;
+            if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
+                return Err(bad(format!(
+                    "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
+                     another file",
+                    r.zeta,
+                    r.restitution,
+                    model.params.zeta(),
+                    model.restitution()
+                )));
+            }
+            records.push(r);
+        }
+        complete_len += n as u64;
+    }
+    if first && complete_len == 0 {
+        // Empty (or only a partial header): start afresh.
+        CsvFile::create(path, &CSV_COLUMNS.join(","))?.finish()?;
+        return Ok(records);
+    }
+    let actual = std::fs::metadata(path)
+        .map_err(|e| CliError::io("cannot read", path, e))?
+        .len();
+    if actual > complete_len {
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| CliError::io("cannot open", path, e))?;
+        f.set_len(complete_len)
+            .map_err(|e| CliError::io("cannot truncate", path, e))?;
+    }
+    Ok(records)
+}
+
+/// Classifies `todo` on `threads` workers; each finished record goes to `out` (flushed at once)
+/// and to `sink`. Returns the number computed and the points that failed (reported on stderr).
+fn compute(
+    todo: &[(f64, f64)],
+    model: &Model,
+    co: ClassifyOptions,
+    threads: usize,
+    out: Option<&Path>,
+    mut sink: impl FnMut(Record),
+) -> Result<(usize, Vec<(f64, f64)>), CliError> {
+    let mut csv = match out {
+        Some(p) if p.exists() => Some(CsvFile::append(p)?),
+        Some(p) => Some(CsvFile::create(p, &CSV_COLUMNS.join(","))?),
+        None => None,
+    };
+    if let Some(c) = csv.as_mut() {
+        c.flush()?;
+    }
+    let mut failed = Vec::new();
+    let mut computed = 0usize;
+    parallel::run(
+        todo,
+        threads,
+        &format!("classifying {} points", todo.len()),
+        |&(w, v)| model.at(w, v).and_then(|m| Record::classify(&m, co)),
+        |i, r| {
+            match r {
+                Ok(rec) => {
+                    if let Some(c) = csv.as_mut() {
+                        c.row(&rec.fields())?;
+                        c.flush()?;
+                    }
+                    computed += 1;
+                    sink(rec);
+                }
+                Err(e) => failed.push((todo[i], e)),
+            }
+            Ok(())
+        },
+    )?;
+    for ((w, v), e) in &failed {
+        eprintln!("warning: Ω = {w}, V = {v}: {e}");
+    }
+    Ok((computed, failed.into_iter().map(|f| f.0).collect()))
+}
+
+fn human(s: &Summary) -> String {
+    let mut counts: Vec<_> = s.counts.iter().collect();
+    counts.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
+    let mut text = format!(
+        "map Ω {} × V {} (ζ = {}, e = {}): {} points, {} computed, {} resumed from the file, \
+         {} failed\n\
+         wall time {:.1} s on {} threads: {:.1} points/s; {:.1}% of the points ran the full \
+         length\n",
+        s.omega_range,
+        s.velocity_range,
+        s.zeta,
+        s.restitution,
+        s.points,
+        s.computed,
+        s.resumed,
+        s.failed,
+        s.wall_time_s,
+        s.threads,
+        s.points_per_second,
+        100.0 * s.full_length_share
+    );
+    for (label, n) in counts {
+        text.push_str(&format!("  {n:>7}  {label}\n"));
+    }
+    for (what, p) in [("csv", &s.out), ("plot", &s.plot)] {
+        if let Some(p) = p {
+            text.push_str(&format!("{what}: {}\n", p.display()));
+        }
+    }
+    text
+}
+
+// ---------------------------------------------------------------------------------------------
+// Colours (the paper's logic) and the figure.
+
+/// Snap-throughs over the whole run: none, one, several.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Snaps {
+    None,
+    One,
+    Several,
+}
+
+/// What a map cell shows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+enum Category {
+    /// Period 1..=6, or 7 for P-6+.
+    Periodic(Snaps, u32),
+    Chaotic,
+    Aperiodic,
+    AtRestInWellTwo,
+    Failed,
+}
+
+impl Category {
+    fn label(self) -> String {
+        match self {
+            Category::Periodic(s, p) => format!(
+                "{} snap-through{}, {}",
+                match s {
+                    Snaps::None => "no",
+                    Snaps::One => "one",
+                    Snaps::Several => "several",
+                },
+                if s == Snaps::One { "" } else { "s" },
+                period_label(p)
+            ),
+            Category::Chaotic => "chaotic".into(),
+            Category::Aperiodic => "aperiodic, not chaotic".into(),
+            Category::AtRestInWellTwo => "at rest in well 2".into(),
+            Category::Failed => "failed".into(),
+        }
+    }
+
+    fn colour(self) -> RGBColor {
+        match self {
+            Category::Periodic(s, p) => {
+                let (dark, light) = match s {
+                    Snaps::None => (RGBColor(8, 48, 107), RGBColor(198, 219, 239)),
+                    Snaps::One => (RGBColor(0, 80, 30), RGBColor(199, 233, 192)),
+                    Snaps::Several => (RGBColor(140, 40, 4), RGBColor(253, 212, 158)),
+                };
+                mix(dark, light, f64::from(p.clamp(1, 7) - 1) / 6.0)
+            }
+            Category::Chaotic => RGBColor(15, 15, 15),
+            Category::Aperiodic => RGBColor(140, 140, 140),
+            Category::AtRestInWellTwo => RGBColor(150, 70, 200),
+            Category::Failed => RGBColor(255, 0, 255),
+        }
+    }
+}
+
+fn period_label(p: u32) -> String {
+    if p >= 7 {
+        "P-6+".into()
+    } else {
+        format!("P-{p}")
+    }
+}
+
+fn mix(a: RGBColor, b: RGBColor, s: f64) -> RGBColor {
+    let m = |p: u8, q: u8| (f64::from(p) + s * (f64::from(q) - f64::from(p))).round() as u8;
+    RGBColor(m(a.0, b.0), m(a.1, b.1), m(a.2, b.2))
+}
+
+fn category(r: &Record) -> Category {
+    if r.at_rest_in_second_well {
+        return Category::AtRestInWellTwo;
+    }
+    let snaps = match r.snap_throughs {
+        0 => Snaps::None,
+        1 => Snaps::One,
+        _ => Snaps::Several,
+    };
+    match r.period {
+        Some(p) => Category::Periodic(snaps, p.min(7)),
+        None if r.chaotic => Category::Chaotic,
+        None => Category::Aperiodic,
+    }
+}
+
+const LINE_SINGLE: RGBColor = RGBColor(255, 255, 255);
+const LINE_INTERWELL: RGBColor = RGBColor(0, 225, 255);
+const LINE_QUASI: RGBColor = RGBColor(255, 230, 0);
+
+fn draw(
+    path: &Path,
+    model: &Model,
+    omegas: Range,
+    vs: Range,
+    records: &[&Record],
+    failed: &[(f64, f64)],
+    co: ClassifyOptions,
+) -> Result<(), CliError> {
+    plot::png(path, (1600, 1000), |root| {
+        draw_map(root, model, omegas, vs, records, failed, co)
+    })
+}
+
+fn draw_map(
+    root: &Area<'_>,
+    model: &Model,
+    omegas: Range,
+    vs: Range,
+    records: &[&Record],
+    failed: &[(f64, f64)],
+    co: ClassifyOptions,
+) -> DrawResult {
+    let e = model.restitution();
+    let t = Thresholds::new(e, None);
+    let (v_single, v_inter) = (t.single_impact, t.interwell);
+    let legend = [
+        (
+            Mark::Halo(LINE_SINGLE, None),
+            format!("single impact V = 1/(4(1+e)) = {v_single:.4}"),
+        ),
+        (
+            Mark::Halo(LINE_INTERWELL, Some((10, 6))),
+            format!("interwell V = (1−e)/(2(1+e)) = {v_inter:.4}"),
+        ),
+        (
+            Mark::Halo(LINE_QUASI, Some((3, 4))),
+            "quasi-static V = Ω/2".to_string(),
+        ),
+    ];
+    let total = omegas.n * vs.n;
+    let area = header(
+        root,
+        &format!("Response classes — ζ = {}, e = {e}", model.params.zeta()),
+        &format!(
+            "{} × {} points ({} classified), from rest at x = 0, up to {} natural periods; \
+             thresholds of Eq. 16–18",
+            omegas.n,
+            vs.n,
+            records.len(),
+            co.max_natural_periods
+        ),
+        &legend,
+    )?;
+    let (w, _) = area.dim_in_pixel();
+    let (left, right) = area.split_horizontally(w - 330);
+    let pad = |r: Range| {
+        let (lo, hi) = r.bounds();
+        let h = if r.n > 1 {
+            0.5 * r.step().abs()
+        } else {
+            0.01 * lo.abs().max(1.0)
+        };
+        (lo - h, hi + h)
+    };
+    let (wx, vy) = (pad(omegas), pad(vs));
+    let mut chart = plot::chart(
+        &left,
+        wx,
+        vy,
+        "shaker frequency ratio Ω (units of ω0)",
+        "shaker velocity amplitude V (units of ω0·Δx)",
+        None,
+    )?;
+    let (hw, hv) = (
+        0.5 * (wx.1 - wx.0) / omegas.n as f64,
+        0.5 * (vy.1 - vy.0) / vs.n as f64,
+    );
+    let mut present: HashMap<Category, usize> = HashMap::new();
+    let cells = records
+        .iter()
+        .map(|r| (r.omega, r.velocity, category(r)))
+        .chain(failed.iter().map(|&(w, v)| (w, v, Category::Failed)));
+    let mut rects = Vec::with_capacity(total);
+    for (om, v, c) in cells {
+        *present.entry(c).or_default() += 1;
+        rects.push(Rectangle::new(
+            [(om - hw, v - hv), (om + hw, v + hv)],
+            c.colour().filled(),
+        ));
+    }
+    chart.draw_series(rects)?;
+    // Thresholds, clipped to the chart.
+    let to_px = |p: (f64, f64)| chart.backend_coord(&p);
+    let (x0, x1) = wx;
+    let (y0, y1) = vy;
+    let mut labels = Vec::new();
+    for (v, colour, dash, name) in [
+        (v_single, LINE_SINGLE, None, "single impact"),
+        (v_inter, LINE_INTERWELL, Some((10, 6)), "interwell"),
+    ] {
+        if v > y0 && v < y1 {
+            halo_segments(root, &[to_px((x0, v)), to_px((x1, v))], colour, dash)?;
+            labels.push((to_px((x1, v)), name));
+        }
+    }
+    // V = Ω/2 from where it enters the chart to where it leaves.
+    let a = x0.max(2.0 * y0);
+    let b = x1.min(2.0 * y1);
+    if b > a {
+        halo_segments(
+            root,
+            &[to_px((a, quasi_static(a))), to_px((b, quasi_static(b)))],
+            LINE_QUASI,
+            Some((3, 4)),
+        )?;
+    }
+    for ((px, py), name) in labels {
+        let style = plot::left((FONT, 16).into_font().color(&BLACK));
+        let text = format!("{name} ");
+        let (tw, _) = root.estimate_text_size(&text, &style)?;
+        let x = px - tw as i32 - 8;
+        root.draw(&Rectangle::new(
+            [(x - 4, py - 22), (x + tw as i32 + 2, py - 4)],
+            WHITE.mix(0.85).filled(),
+        ))?;
+        root.draw(&Text::new(text, (x, py - 13), style))?;
+    }
+    legend_panel(&right, &present, records.len() + failed.len())
+}
+
+/// The colour key: a table of hue (snap-throughs) × shade (period), then the other categories
+/// with their counts.
+fn legend_panel(area: &Area<'_>, present: &HashMap<Category, usize>, n: usize) -> DrawResult {
+    let text = |size| (FONT, size).into_font().color(&BLACK);
+    let y0 = 40;
+    area.draw(&Text::new("Colour key", (12, y0), plot::left(text(20))))?;
+    let rows = [
+        (Snaps::None, "no snap-through"),
+        (Snaps::One, "one snap-through"),
+        (Snaps::Several, "several"),
+    ];
+    let (col0, cw, rh) = (150, 24, 30);
+    for p in 1..=7u32 {
+        let x = col0 + (p as i32 - 1) * cw + cw / 2;
+        let label = if p == 7 {
+            "6+".to_string()
+        } else {
+            p.to_string()
+        };
+        area.draw(&Text::new(label, (x, y0 + 34), plot::centred(text(14))))?;
+    }
+    area.draw(&Text::new(
+        "period P-",
+        (col0 - 6, y0 + 34),
+        text(14).pos(plotters::style::text_anchor::Pos::new(
+            plotters::style::text_anchor::HPos::Right,
+            plotters::style::text_anchor::VPos::Center,
+        )),
+    ))?;
+    for (k, (s, name)) in rows.iter().enumerate() {
+        let y = y0 + 62 + k as i32 * rh;
+        area.draw(&Text::new(*name, (12, y), plot::left(text(15))))?;
+        for p in 1..=7u32 {
+            let c = Category::Periodic(*s, p);
+            let x = col0 + (p as i32 - 1) * cw;
+            area.draw(&Rectangle::new(
+                [(x + 2, y - 11), (x + cw - 2, y + 11)],
+                c.colour().filled(),
+            ))?;
+            if present.contains_key(&c) {
+                area.draw(&Circle::new((x + cw / 2, y), 2, WHITE.mix(0.8).filled()))?;
+            }
+        }
+    }
+    let mut y = y0 + 62 + 3 * rh + 14;
+    area.draw(&Text::new(
+        "(dot: occurs in this map)",
+        (12, y),
+        plot::left(text(13).color(&RGBColor(90, 90, 90))),
+    ))?;
+    y += 36;
+    let mut others = vec![
+        Category::Chaotic,
+        Category::Aperiodic,
+        Category::AtRestInWellTwo,
+    ];
+    if present.contains_key(&Category::Failed) {
+        others.push(Category::Failed);
+    }
+    for c in others {
+        area.draw(&Rectangle::new(
+            [(14, y - 11), (36, y + 11)],
+            c.colour().filled(),
+        ))?;
+        let count = present.get(&c).copied().unwrap_or(0);
+        let label = match c {
+            Category::AtRestInWellTwo => "converged to the second equilibrium".to_string(),
+            _ => c.label(),
+        };
+        area.draw(&Text::new(label, (46, y - 1), plot::left(text(15))))?;
+        area.draw(&Text::new(
+            format!(
+                "{count} points ({:.1}%)",
+                100.0 * count as f64 / n.max(1) as f64
+            ),
+            (46, y + 17),
+            plot::left(text(13).color(&RGBColor(90, 90, 90))),
+        ))?;
+        y += 50;
+    }
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn interleaved_order_is_a_permutation() {
+        for n in [1, 2, 7, 60, 2400, 60_000] {
+            let mut seen = vec![false; n];
+            for i in interleaved(n) {
+                assert!(!seen[i], "n = {n}: {i} twice");
+                seen[i] = true;
+            }
+            assert!(seen.iter().all(|&s| s));
+        }
+    }
+}

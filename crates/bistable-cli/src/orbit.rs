@@ -1,0 +1,497 @@
+//! `bistable orbit`: a periodic orbit by shooting, with its Floquet multipliers and stability;
+//! or (with `--continue-omega`) branches of orbits continued in Ω for several V (Fig. 11a).
+
+use std::path::PathBuf;
+
+use clap::Args;
+use plotters::prelude::*;
+use serde::Serialize;
+
+use bistable_core::{shoot, Event, ShootOptions};
+
+use crate::attractor::{detect_period, steady_cycles};
+use crate::branches::{self, Branches, Seed};
+use crate::common::{Model, ModelArgs};
+use crate::error::CliError;
+use crate::output::{print_json, print_text, CsvFile};
+use crate::parallel;
+use crate::plot::{self, header, Area, DrawResult, Mark};
+use crate::ranges::{Pair, Range};
+
+/// Long description shown by `bistable orbit --help`.
+pub const LONG_ABOUT: &str = "\
+Find a periodic orbit by shooting: Newton's method on the map over --period
+shaker periods, from plate phase 0 to plate phase 0, with the monodromy matrix M
+from the variational equations (saltation matrices at impacts, M = 0 once the
+mass sticks). The Floquet multipliers are the eigenvalues of M; the orbit is
+stable when all have modulus < 1. Without sticking, det M must equal
+e^(2·impacts)·exp(−2ζ·pT) with T = 2π/Ω (a consistency check, reported).
+
+The initial guess is the section point (x, x') at plate phase 0 after --settle
+shaker periods of a simulation from the paper's initial condition (for a stable
+orbit that is its attractor, and the JSON reports how far the fixed point is
+from it), or --guess X,V.
+
+With --continue-omega A:B:N: natural continuation in Ω for each --velocity
+(several allowed, comma separated), like the paper's Fig. 11a. At every Ω a
+simulation (--settle shaker periods) seeds the orbit of period --period (or, if
+the attractor has a multiple of that period, the orbit it doubled from); each
+orbit found is continued from point to point in both directions, so unstable
+parts are followed past period doublings. Folds end a branch (natural
+continuation cannot turn around). --plot draws the largest displacement of
+the orbits against Ω: stable thick and solid, unstable thin and dashed.";
+
+/// Shown after the options by `bistable orbit --help`.
+pub const AFTER_HELP: &str = "\
+JSON (one orbit): omega, velocity, period, x0, v0 (fixed point at plate phase 0),
+multipliers [{re, im, abs}], max_abs_multiplier, stable, floquet_exponent
+(ln|λ|max/(pT), per unit of τ), impacts, sticks, snap_throughs, max_x,
+cycle_max (largest x in each cycle), iterations, residual, monodromy,
+det_monodromy, det_identity, det_relative_error (null when the orbit sticks),
+guess, guess_source, distance_to_guess.
+
+CSV (--out, with --continue-omega): one row per orbit, as the _orbits.csv of
+'bistable bifurcation'.
+
+Exit codes: 0 success; 2 invalid options; 1 Newton failed, a simulation failed
+or a file could not be written.
+
+Examples:
+  bistable orbit --omega 1.75 --velocity 0.07
+  bistable orbit --omega 2.2 --velocity 0.07 --period 2 --json
+  bistable orbit --omega 2.2 --velocity 0.07 --guess 0.05,0.1
+  bistable orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 \\
+      --plot out/orbits.png --out out/orbits.csv";
+
+/// Options of `bistable orbit`.
+#[derive(Debug, Clone, Args)]
+pub struct OrbitArgs {
+    /// Shaker frequency ratio Ω (> 0); not with --continue-omega.
+    #[arg(
+        long,
+        value_name = "OMEGA",
+        allow_negative_numbers = true,
+        required_unless_present = "continue_omega",
+        conflicts_with = "continue_omega"
+    )]
+    pub omega: Option<f64>,
+
+    /// Shaker velocity amplitude V (>= 0); with --continue-omega several, comma separated.
+    #[arg(
+        long,
+        value_name = "V",
+        allow_negative_numbers = true,
+        value_delimiter = ',',
+        required = true
+    )]
+    pub velocity: Vec<f64>,
+
+    /// Period of the orbit in shaker periods (1..=64).
+    #[arg(long, value_name = "P", default_value_t = 1)]
+    pub period: u32,
+
+    /// Initial guess x,x' at plate phase 0 instead of the simulated section point.
+    #[arg(long, value_name = "X,V", allow_negative_numbers = true)]
+    pub guess: Option<Pair>,
+
+    /// Shaker periods simulated from the paper's initial condition for the guess.
+    #[arg(long, value_name = "N", default_value_t = 2000)]
+    pub settle: u32,
+
+    /// Continue the orbits over Ω = A:B:N for each --velocity.
+    #[arg(long, value_name = "A:B:N", help_heading = "Continuation")]
+    pub continue_omega: Option<Range>,
+
+    /// Draw the continued branches to FILE.png.
+    #[arg(
+        long,
+        value_name = "FILE.png",
+        requires = "continue_omega",
+        help_heading = "Continuation"
+    )]
+    pub plot: Option<PathBuf>,
+
+    /// Write the continued orbits to FILE.csv.
+    #[arg(
+        long,
+        value_name = "FILE.csv",
+        requires = "continue_omega",
+        help_heading = "Continuation"
+    )]
+    pub out: Option<PathBuf>,
+
+    /// Worker threads for --continue-omega [default: all cores].
+    #[arg(long, value_name = "N", help_heading = "Continuation")]
+    pub threads: Option<usize>,
+
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+#[derive(Debug, Serialize)]
+struct Multiplier {
+    re: f64,
+    im: f64,
+    abs: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct OrbitReport {
+    omega: f64,
+    velocity: f64,
+    period: u32,
+    x0: f64,
+    v0: f64,
+    multipliers: Vec<Multiplier>,
+    max_abs_multiplier: f64,
+    stable: bool,
+    floquet_exponent: f64,
+    impacts: u64,
+    sticks: bool,
+    snap_throughs: u64,
+    max_x: f64,
+    cycle_max: Vec<f64>,
+    iterations: u32,
+    residual: f64,
+    monodromy: [[f64; 2]; 2],
+    det_monodromy: f64,
+    det_identity: f64,
+    det_relative_error: Option<f64>,
+    guess: (f64, f64),
+    guess_source: String,
+    distance_to_guess: f64,
+}
+
+/// Runs `bistable orbit`.
+pub fn run(args: &OrbitArgs) -> Result<(), CliError> {
+    if !(1..=64).contains(&args.period) {
+        return Err(CliError::invalid_text(
+            "--period",
+            args.period,
+            "must be in [1, 64]",
+        ));
+    }
+    match (args.omega, args.continue_omega) {
+        (Some(w), None) => single(args, w),
+        (None, Some(r)) => continuation(args, r),
+        // clap makes exactly one of them present.
+        _ => Err(CliError::invalid_text(
+            "--omega",
+            "",
+            "give --omega or --continue-omega",
+        )),
+    }
+}
+
+fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
+    let [velocity] = args.velocity[..] else {
+        return Err(CliError::invalid_text(
+            "--velocity",
+            args.velocity
+                .iter()
+                .map(|v| v.to_string())
+                .collect::<Vec<_>>()
+                .join(","),
+            "takes one value without --continue-omega",
+        ));
+    };
+    let model = Model::new(&args.model, omega, velocity)?;
+    let (guess, source) = match args.guess {
+        Some(Pair(x, v)) => ((x, v), "--guess".to_string()),
+        None => {
+            let mut sim = model.simulator()?;
+            sim.advance_instant(
+                model.shaker.section(u64::from(args.settle)),
+                &mut |_: &Event| {},
+            )?;
+            let st = sim.state();
+            (
+                (st.x, st.v),
+                format!(
+                    "section point after {} shaker periods from the paper's initial condition",
+                    args.settle
+                ),
+            )
+        }
+    };
+    let orbit = shoot(
+        model.params,
+        model.shaker,
+        model.opts,
+        args.period,
+        guess,
+        ShootOptions::default(),
+    )
+    .map_err(|e| {
+        CliError::Failed(format!(
+            "no {}-periodic orbit found from ({}, {}): {e}",
+            args.period, guess.0, guess.1
+        ))
+    })?;
+    let cycle_max = branches::analyse(&model, orbit)?
+        .map(|o| o.cycle_max)
+        .unwrap_or_default();
+    let m = orbit.monodromy;
+    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
+    let abs = |(re, im): (f64, f64)| re.hypot(im);
+    let max_abs = abs(orbit.multipliers[0]);
+    let report = OrbitReport {
+        omega,
+        velocity,
+        period: orbit.periods,
+        x0: orbit.x0,
+        v0: orbit.v0,
+        multipliers: orbit
+            .multipliers
+            .iter()
+            .map(|&(re, im)| Multiplier {
+                re,
+                im,
+                abs: abs((re, im)),
+            })
+            .collect(),
+        max_abs_multiplier: max_abs,
+        stable: orbit.stable,
+        floquet_exponent: max_abs.ln() / (f64::from(orbit.periods) * model.shaker_period()),
+        impacts: orbit.impacts,
+        sticks: orbit.sticks,
+        snap_throughs: orbit.snap_throughs,
+        max_x: orbit.max_x,
+        cycle_max,
+        iterations: orbit.iterations,
+        residual: orbit.residual,
+        monodromy: m,
+        det_monodromy: det,
+        det_identity: orbit.det_identity,
+        det_relative_error: (!orbit.sticks)
+            .then(|| ((det - orbit.det_identity) / orbit.det_identity).abs()),
+        guess,
+        guess_source: source,
+        distance_to_guess: (orbit.x0 - guess.0).hypot(orbit.v0 - guess.1),
+    };
+    if args.model.json {
+        print_json(&report)
+    } else {
+        print_text(&human(&report))
+    }
+}
+
+fn human(r: &OrbitReport) -> String {
+    let mults: Vec<String> = r
+        .multipliers
+        .iter()
+        .map(|m| {
+            if m.im == 0.0 {
+                format!("{:.6}", m.re)
+            } else {
+                format!(
+                    "{:.6} {} {:.6}i",
+                    m.re,
+                    if m.im < 0.0 { '−' } else { '+' },
+                    m.im.abs()
+                )
+            }
+        })
+        .collect();
+    format!(
+        "period-{} orbit at Ω = {}, V = {}: {}\n\
+         fixed point at plate phase 0: x = {:.12}, x' = {:.12} ({} Newton iterations, \
+         residual {:.1e})\n\
+         Floquet multipliers: {} (largest |λ| = {:.6})\n\
+         impacts per orbit: {}{}, snap-throughs: {}, max x = {:.6}\n\
+         det M = {:.9e}, e^(2·impacts)·exp(−2ζpT) = {:.9e}{}\n\
+         guess ({:.6}, {:.6}): {}; distance to the fixed point {:.2e}\n",
+        r.period,
+        r.omega,
+        r.velocity,
+        if r.stable { "stable" } else { "unstable" },
+        r.x0,
+        r.v0,
+        r.iterations,
+        r.residual,
+        mults.join(", "),
+        r.max_abs_multiplier,
+        r.impacts,
+        if r.sticks { " (sticks: M = 0)" } else { "" },
+        r.snap_throughs,
+        r.max_x,
+        r.det_monodromy,
+        r.det_identity,
+        r.det_relative_error
+            .map_or(String::new(), |e| format!(" (relative difference {e:.1e})")),
+        r.guess.0,
+        r.guess.1,
+        r.guess_source,
+        r.distance_to_guess
+    )
+}
+
+#[derive(Debug, Serialize)]
+struct BranchSummary {
+    velocity: f64,
+    orbits: usize,
+    stable: usize,
+    omega_min: Option<f64>,
+    omega_max: Option<f64>,
+}
+
+#[derive(Debug, Serialize)]
+struct ContinuationSummary {
+    period: u32,
+    omega_range: String,
+    branches: Vec<BranchSummary>,
+    files: Vec<PathBuf>,
+}
+
+fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
+    let range = range.check("--continue-omega", |w| w > 0.0, "Ω must be > 0")?;
+    let threads = parallel::threads(args.threads, "--threads")?;
+    let omegas = range.values();
+    let p = args.period;
+    let mut all: Vec<(f64, Branches)> = Vec::new();
+    for &v in &args.velocity {
+        let models = omegas
+            .iter()
+            .map(|&w| Model::new(&args.model, w, v))
+            .collect::<Result<Vec<_>, _>>()?;
+        let record = 4 * p.max(16) + 8;
+        let mut seeds: Vec<Seed> = Vec::new();
+        parallel::run(
+            &models,
+            threads,
+            &format!("simulating {} points at V = {v}", models.len()),
+            |m| steady_cycles(m, args.settle, record, 16),
+            |i, c| {
+                let c = c?;
+                let period = detect_period(&c.sections, 16, 1e-7);
+                seeds.extend(branches::seeds_from(i, &c.sections, period, &[p]));
+                Ok(())
+            },
+        )?;
+        let b = branches::build(&models, &[p], &seeds, threads)?;
+        all.extend(b.into_iter().map(|b| (v, b)));
+    }
+    let mut files = Vec::new();
+    if let Some(path) = &args.out {
+        let mut csv = CsvFile::create(path, branches::CSV_HEADER)?;
+        for (_, b) in &all {
+            branches::write_csv(&mut csv, std::slice::from_ref(b))?;
+        }
+        files.push(csv.finish()?);
+    }
+    if let Some(path) = &args.plot {
+        let model = Model::new(&args.model, range.start, args.velocity[0])?;
+        plot::png(path, (1400, 950), |root| {
+            draw(root, &model, p, &omegas, &all)
+        })?;
+        files.push(path.clone());
+    }
+    let summary = ContinuationSummary {
+        period: p,
+        omega_range: range.to_string(),
+        branches: all
+            .iter()
+            .map(|(v, b)| {
+                let covered: Vec<f64> = b
+                    .slots
+                    .iter()
+                    .zip(&omegas)
+                    .filter(|(s, _)| !s.is_empty())
+                    .map(|(_, &w)| w)
+                    .collect();
+                BranchSummary {
+                    velocity: *v,
+                    orbits: b.len(),
+                    stable: b.slots.iter().flatten().filter(|o| o.orbit.stable).count(),
+                    omega_min: covered.first().copied(),
+                    omega_max: covered.last().copied(),
+                }
+            })
+            .collect(),
+        files,
+    };
+    if args.model.json {
+        print_json(&summary)
+    } else {
+        let mut text = format!(
+            "period-{p} orbits continued over Ω = {}:\n",
+            summary.omega_range
+        );
+        for b in &summary.branches {
+            text.push_str(&format!(
+                "  V = {}: {} orbits ({} stable), Ω from {} to {}\n",
+                b.velocity,
+                b.orbits,
+                b.stable,
+                b.omega_min.map_or("-".into(), |w| format!("{w:.4}")),
+                b.omega_max.map_or("-".into(), |w| format!("{w:.4}"))
+            ));
+        }
+        for f in &summary.files {
+            text.push_str(&format!("wrote {}\n", f.display()));
+        }
+        print_text(&text)
+    }
+}
+
+/// Distinct colours for the velocity series.
+const SERIES: [RGBColor; 8] = [
+    RGBColor(31, 87, 165),
+    RGBColor(215, 40, 40),
+    RGBColor(30, 150, 60),
+    RGBColor(230, 140, 0),
+    RGBColor(140, 60, 180),
+    RGBColor(0, 160, 170),
+    RGBColor(120, 80, 40),
+    RGBColor(230, 60, 160),
+];
+
+fn draw(
+    root: &Area<'_>,
+    model: &Model,
+    period: u32,
+    omegas: &[f64],
+    all: &[(f64, Branches)],
+) -> DrawResult {
+    let mut legend: Vec<(Mark, String)> = all
+        .iter()
+        .enumerate()
+        .map(|(k, (v, _))| (Mark::Line(SERIES[k % SERIES.len()], 3), format!("V = {v}")))
+        .collect();
+    legend.push((Mark::Line(RGBColor(60, 60, 60), 3), "stable".to_string()));
+    legend.push((Mark::Dashed(RGBColor(60, 60, 60)), "unstable".to_string()));
+    let area = header(
+        root,
+        &format!(
+            "Period-{period} orbits against Ω — ζ = {}, e = {}",
+            model.params.zeta(),
+            model.restitution()
+        ),
+        "largest displacement of each orbit found by shooting, continued in Ω from simulated \
+         attractors",
+        &legend,
+    )?;
+    let (x0, x1) = plot::range(omegas.iter().copied(), 0.01);
+    let (y0, y1) = plot::range(
+        all.iter()
+            .flat_map(|(_, b)| b.slots.iter().flatten())
+            .flat_map(|o| o.cycle_max.iter().copied())
+            .chain([0.0]),
+        0.05,
+    );
+    let mut chart = plot::chart(
+        &area,
+        (x0, x1),
+        (y0, y1),
+        "shaker frequency ratio Ω (units of ω0)",
+        "max displacement x_max of the orbit (units of Δx)",
+        None,
+    )?;
+    if y0 < 0.5 && y1 > 0.5 {
+        plot::hline(&mut chart, 0.5, RGBColor(90, 90, 90))?;
+    }
+    for (k, (_, b)) in all.iter().enumerate() {
+        branches::draw(&mut chart, b, omegas, SERIES[k % SERIES.len()])?;
+    }
+    Ok(())
+}
