@@ -27,11 +27,11 @@ fn check<T: Serialize + DeserializeOwned + PartialEq + std::fmt::Debug>(
     let bytes = cdr(&value);
     let got: String = bytes.iter().map(|b| format!("{b:02x}")).collect();
     assert_eq!(got, hex, "{value:?}");
-    let (back, used) =
-        ros2_client::dds::rustdds::cdr_encoding::from_bytes::<T, byteorder::LittleEndian>(
-            &bytes[4..],
-        )
-        .unwrap();
+    let (back, used) = ros2_client::dds::rustdds::cdr_encoding::from_bytes::<
+        T,
+        byteorder::LittleEndian,
+    >(&bytes[4..])
+    .unwrap();
     assert_eq!(back, value);
     assert_eq!(used + 4, bytes.len());
     bytes.len()
@@ -39,11 +39,19 @@ fn check<T: Serialize + DeserializeOwned + PartialEq + std::fmt::Debug>(
 
 #[test]
 fn cdr_bytes_match_rosidl() {
-    let text = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/tests/data/cdr_golden.json")).unwrap();
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/tests/data/cdr_golden.json"
+    ))
+    .unwrap();
     let cases: Vec<serde_json::Value> = serde_json::from_str(&text).unwrap();
     let mut types = Vec::new();
     for case in &cases {
-        let (ty, fields, hex) = (case["type"].as_str().unwrap(), &case["fields"], case["cdr"].as_str().unwrap());
+        let (ty, fields, hex) = (
+            case["type"].as_str().unwrap(),
+            &case["fields"],
+            case["cdr"].as_str().unwrap(),
+        );
         let len = match ty {
             "MassState" => check::<MassState>(fields, hex),
             "ImpactEvent" => check::<ImpactEvent>(fields, hex),
@@ -54,5 +62,8 @@ fn cdr_bytes_match_rosidl() {
         assert!(len > 4);
         types.push(ty);
     }
-    assert_eq!(types, ["MassState", "ImpactEvent", "ShakerCommand", "Clock"]);
+    assert_eq!(
+        types,
+        ["MassState", "ImpactEvent", "ShakerCommand", "Clock"]
+    );
 }
