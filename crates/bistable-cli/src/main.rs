@@ -17,7 +17,9 @@
 //! - `branches.rs`: periodic-orbit branches along a parameter grid (shooting, continuation);
 //! - `bifurcation.rs`: `bistable bifurcation`;
 //! - `orbit.rs`: `bistable orbit`;
-//! - `thresholds.rs`: `bistable thresholds`.
+//! - `thresholds.rs`: `bistable thresholds`;
+//! - `energy_map.rs`: `bistable energy-map`;
+//! - `spectrum.rs`: `bistable spectrum`.
 //!
 //! To add a subcommand: write `foo.rs` with a `#[derive(clap::Args)] pub struct FooArgs` that has
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
@@ -28,6 +30,7 @@ mod bifurcation;
 mod branches;
 mod classify;
 mod common;
+mod energy_map;
 mod error;
 mod map;
 mod orbit;
@@ -37,6 +40,7 @@ mod plot;
 mod progress;
 mod ranges;
 mod simulate;
+mod spectrum;
 mod thresholds;
 
 use std::process::ExitCode;
@@ -92,6 +96,16 @@ enum Command {
     #[command(long_about = orbit::LONG_ABOUT, after_help = orbit::AFTER_HELP)]
     Orbit(orbit::OrbitArgs),
 
+    /// Energy change per impact ΔK/ΔK0 over impact phase and pre-impact velocity (Eq. 13–15),
+    /// optionally with a simulation's impacts.
+    #[command(long_about = energy_map::LONG_ABOUT, after_help = energy_map::AFTER_HELP)]
+    EnergyMap(energy_map::EnergyMapArgs),
+
+    /// Amplitude spectrum of the steady-state x(τ) (Hann window, FFT): lines for periodic,
+    /// broadband for chaotic responses.
+    #[command(long_about = spectrum::LONG_ABOUT, after_help = spectrum::AFTER_HELP)]
+    Spectrum(spectrum::SpectrumArgs),
+
     /// The velocity thresholds of Eq. 16–18 (single impact, interwell, quasi-static).
     #[command(long_about = thresholds::LONG_ABOUT)]
     Thresholds(thresholds::ThresholdsArgs),
@@ -106,6 +120,8 @@ fn main() -> ExitCode {
         Command::Bifurcation(args) => bifurcation::run(args),
         Command::Orbit(args) => orbit::run(args),
         Command::Thresholds(args) => thresholds::run(args),
+        Command::EnergyMap(args) => energy_map::run(args),
+        Command::Spectrum(args) => spectrum::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -438,7 +438,7 @@ impl Category {
                     Snaps::One => (RGBColor(0, 80, 30), RGBColor(199, 233, 192)),
                     Snaps::Several => (RGBColor(140, 40, 4), RGBColor(253, 212, 158)),
                 };
-                mix(dark, light, f64::from(p.clamp(1, 7) - 1) / 6.0)
+                plot::mix(dark, light, f64::from(p.clamp(1, 7) - 1) / 6.0)
             }
             Category::Chaotic => RGBColor(15, 15, 15),
             Category::Aperiodic => RGBColor(140, 140, 140),
@@ -454,11 +454,6 @@ fn period_label(p: u32) -> String {
     } else {
         format!("P-{p}")
     }
-}
-
-fn mix(a: RGBColor, b: RGBColor, s: f64) -> RGBColor {
-    let m = |p: u8, q: u8| (f64::from(p) + s * (f64::from(q) - f64::from(p))).round() as u8;
-    RGBColor(m(a.0, b.0), m(a.1, b.1), m(a.2, b.2))
 }
 
 fn category(r: &Record) -> Category {

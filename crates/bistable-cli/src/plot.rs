@@ -734,12 +734,14 @@ fn poincare_times(data: &PlotData) -> impl Iterator<Item = f64> {
     (0..).map(move |k| (k0 + f64::from(k)) * ts)
 }
 
+/// The colour a fraction `s ∈ [0, 1]` of the way from `a` to `b`.
+pub(crate) fn mix(a: RGBColor, b: RGBColor, s: f64) -> RGBColor {
+    let m = |p: u8, q: u8| (f64::from(p) + s * (f64::from(q) - f64::from(p))).round() as u8;
+    RGBColor(m(a.0, b.0), m(a.1, b.1), m(a.2, b.2))
+}
+
 /// Colour for the fraction `s ∈ [0, 1]` of the run: yellow, red, dark violet.
-fn ramp(s: f64) -> RGBColor {
-    let mix = |a: RGBColor, b: RGBColor, s: f64| {
-        let m = |p: u8, q: u8| (f64::from(p) + s * (f64::from(q) - f64::from(p))).round() as u8;
-        RGBColor(m(a.0, b.0), m(a.1, b.1), m(a.2, b.2))
-    };
+pub(crate) fn ramp(s: f64) -> RGBColor {
     let s = s.clamp(0.0, 1.0);
     if s < 0.5 {
         mix(EARLY, MIDDLE, 2.0 * s)

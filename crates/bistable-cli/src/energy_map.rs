@@ -1,0 +1,358 @@
+//! `bistable energy-map`: the energy change of an impact (Eq. 13–15) over impact phase and
+//! pre-impact velocity, with the neutral and grazing lines, optionally with the impacts of a
+//! simulation on top.
+
+use std::path::PathBuf;
+
+use clap::Args;
+use plotters::prelude::*;
+
+use bistable_core::Event;
+
+use crate::common::{positive, Model, ModelArgs};
+use crate::error::CliError;
+use crate::output::print_text;
+use crate::plot::{self, header, Area, DrawResult, Mark, FONT};
+
+const TAU: f64 = std::f64::consts::TAU;
+
+/// Long description shown by `bistable energy-map --help`.
+pub const LONG_ABOUT: &str = "\
+Draw the kinetic energy change of an impact, normalised by that of the first
+impact (Eq. 10, 11, 13),
+
+  ΔK/ΔK0 = ((1+e)·cos φ − e·u)² − u²) / (1+e)²,   u = x'₋/V,
+
+over the impact phase φ/2π ∈ [0, 1) and the pre-impact velocity u = x'₋/V
+(the mass velocity just before the impact, in units of the shaker velocity
+amplitude V). Red: the impact adds energy; blue: it takes energy away; the
+colour scale is asinh-compressed (see the colour bar).
+
+Lines: the neutral line ΔK = 0, u = −(1+e)/(1−e)·cos φ, and the grazing line
+u = cos φ (zero relative velocity, also ΔK = 0): an impact adds energy iff it
+lies between them (Eq. 14). Above the grazing line the mass moves up faster
+than the plate and cannot be hit (Eq. 15): that region is hatched grey.
+
+With --overlay, the impacts of a simulation at (--omega, --velocity) from the
+paper's initial condition over --periods natural periods are drawn on top,
+coloured from early (yellow) to late (dark violet).";
+
+/// Shown after the options by `bistable energy-map --help`.
+pub const AFTER_HELP: &str = "\
+Examples:
+  bistable energy-map --plot out/energy_map.png
+  bistable energy-map --restitution 0.7 --plot out/energy_map_e07.png
+  bistable energy-map --overlay --omega 2.45 --velocity 0.07 --periods 300 \\
+      --plot out/energy_map_chaos.png";
+
+/// Options of `bistable energy-map`.
+#[derive(Debug, Clone, Args)]
+pub struct EnergyMapArgs {
+    /// Write the figure to FILE.png.
+    #[arg(long, value_name = "FILE.png", required = true)]
+    pub plot: PathBuf,
+
+    /// Range of u = x'₋/V shown, LO:HI [default: up to 1.5, down to below the neutral line
+    /// at φ = 0, or with --overlay to below the lowest overlaid impact].
+    #[arg(long, value_name = "LO:HI", allow_hyphen_values = true)]
+    pub u_range: Option<String>,
+
+    /// Draw the impacts of a simulation at --omega, --velocity on top.
+    #[arg(long, requires_all = ["omega", "velocity"])]
+    pub overlay: bool,
+
+    /// Shaker frequency ratio Ω of the overlaid simulation (> 0).
+    #[arg(
+        long,
+        value_name = "OMEGA",
+        allow_negative_numbers = true,
+        requires = "overlay"
+    )]
+    pub omega: Option<f64>,
+
+    /// Shaker velocity amplitude V of the overlaid simulation (> 0).
+    #[arg(
+        long,
+        value_name = "V",
+        allow_negative_numbers = true,
+        requires = "overlay"
+    )]
+    pub velocity: Option<f64>,
+
+    /// Natural periods simulated for --overlay.
+    #[arg(long, value_name = "N", default_value_t = 200.0, requires = "overlay")]
+    pub periods: f64,
+
+    #[command(flatten)]
+    pub model: ModelArgs,
+}
+
+/// `ΔK/ΔK0` of an impact at phase angle `phi` with pre-impact velocity `u·V` (Eq. 13).
+pub fn energy_ratio(e: f64, phi: f64, u: f64) -> f64 {
+    let after = (1.0 + e) * phi.cos() - e * u;
+    (after * after - u * u) / ((1.0 + e) * (1.0 + e))
+}
+
+/// `u` of the neutral line `ΔK = 0` other than the grazing line (Eq. 14).
+pub fn neutral(e: f64, phi: f64) -> f64 {
+    -(1.0 + e) / (1.0 - e) * phi.cos()
+}
+
+fn parse_span(text: &str) -> Result<(f64, f64), CliError> {
+    let bad = || CliError::invalid_text("--u-range", text, "expected LO:HI with LO < HI");
+    let (a, b) = text.split_once(':').ok_or_else(bad)?;
+    let (lo, hi): (f64, f64) = (
+        a.trim().parse().map_err(|_| bad())?,
+        b.trim().parse().map_err(|_| bad())?,
+    );
+    if lo.is_finite() && hi.is_finite() && lo < hi {
+        Ok((lo, hi))
+    } else {
+        Err(bad())
+    }
+}
+
+/// Runs `bistable energy-map`.
+pub fn run(args: &EnergyMapArgs) -> Result<(), CliError> {
+    let e = args.model.restitution;
+    if !(e.is_finite() && (0.0..1.0).contains(&e)) {
+        return Err(CliError::invalid(
+            "--restitution",
+            e,
+            "must be in [0, 1) for the energy map",
+        ));
+    }
+    let span = args.u_range.as_deref().map(parse_span).transpose()?;
+    // (phase in cycles, u, time fraction) of the overlaid impacts.
+    let mut impacts: Vec<(f64, f64, f64)> = Vec::new();
+    let mut overlay_label = None;
+    if args.overlay {
+        let (w, v) = (
+            args.omega.unwrap_or(f64::NAN),
+            args.velocity.unwrap_or(f64::NAN),
+        );
+        let model = Model::new(&args.model, w, v)?;
+        if model.velocity() <= 0.0 {
+            return Err(CliError::invalid(
+                "--velocity",
+                v,
+                "must be > 0 for --overlay",
+            ));
+        }
+        let t_end = positive("--periods", args.periods)? * TAU;
+        let mut sim = model.simulator()?;
+        sim.advance_to(t_end, &mut |ev: &Event| {
+            if let Event::Impact(i) = ev {
+                if let Some(ph) = i.phase {
+                    impacts.push((ph, i.v_before / model.velocity(), i.t / t_end));
+                }
+            }
+        })?;
+        overlay_label = Some(format!(
+            "{} impacts of the run at Ω = {w}, V = {v} over {} natural periods",
+            impacts.len(),
+            args.periods
+        ));
+    }
+    // Default: the whole neutral line, or the overlaid impacts with a margin.
+    let (lo, hi) = span.unwrap_or_else(|| {
+        let lo = if impacts.is_empty() {
+            1.15 * neutral(e, 0.0)
+        } else {
+            impacts.iter().map(|i| i.1).fold(-1.0, f64::min)
+        };
+        (lo - 0.08 * (1.5 - lo), 1.5)
+    });
+    plot::png(&args.plot, (1400, 1000), |root| {
+        draw(root, e, (lo, hi), &impacts, overlay_label.as_deref())
+    })?;
+    print_text(&format!("wrote {}\n", args.plot.display()))
+}
+
+/// Colour scale: `asinh(r/0.5)`, divided by that of the largest magnitude shown.
+fn compress(r: f64) -> f64 {
+    (r / 0.5).asinh()
+}
+
+fn diverging(t: f64) -> RGBColor {
+    // t in [−1, 1]: blue … white … red.
+    let t = t.clamp(-1.0, 1.0);
+    if t >= 0.0 {
+        plot::mix(WHITE, RGBColor(178, 24, 43), t)
+    } else {
+        plot::mix(WHITE, RGBColor(33, 102, 172), -t)
+    }
+}
+
+const NEUTRAL: RGBColor = RGBColor(0, 0, 0);
+const GRAZING: RGBColor = RGBColor(0, 140, 60);
+
+fn draw(
+    root: &Area<'_>,
+    e: f64,
+    (lo, hi): (f64, f64),
+    impacts: &[(f64, f64, f64)],
+    overlay: Option<&str>,
+) -> DrawResult {
+    let mut legend = vec![
+        (
+            Mark::Line(NEUTRAL, 2),
+            "neutral ΔK = 0: x'₋/V = −(1+e)/(1−e)·cos φ".to_string(),
+        ),
+        (
+            Mark::Line(GRAZING, 3),
+            "grazing x'₋/V = cos φ (also ΔK = 0)".to_string(),
+        ),
+        (
+            Mark::Band(RGBColor(120, 120, 120)),
+            "no contact possible".to_string(),
+        ),
+    ];
+    if let Some(label) = overlay {
+        legend.push((Mark::Dot(RGBColor(215, 50, 70), 4), label.to_string()));
+    }
+    let area = header(
+        root,
+        &format!("Energy change per impact ΔK/ΔK0 — e = {e}"),
+        "ΔK/ΔK0 = (((1+e)cos φ − e·u)² − u²)/(1+e)², u = x'₋/V (Eq. 13–15); red adds energy, \
+         blue removes it",
+        &legend,
+    )?;
+    let (w, _) = area.dim_in_pixel();
+    let (left, right) = area.split_horizontally(w - 150);
+    let mut chart = plot::chart(
+        &left,
+        (0.0, 1.0),
+        (lo, hi),
+        "impact phase φ/2π (cycles)",
+        "pre-impact velocity x'₋/V",
+        None,
+    )?;
+    // The values shown, for the colour scale.
+    let (nx, ny) = (360usize, 300usize);
+    let cell = |i: usize, n: usize, a: f64, b: f64| a + (b - a) * (i as f64 + 0.5) / n as f64;
+    let mut vmax: f64 = 1.0;
+    for i in 0..nx {
+        for j in 0..ny {
+            let (ph, u) = (cell(i, nx, 0.0, 1.0), cell(j, ny, lo, hi));
+            if u <= (TAU * ph).cos() {
+                vmax = vmax.max(energy_ratio(e, TAU * ph, u).abs());
+            }
+        }
+    }
+    let scale = compress(vmax);
+    let (dx, dy) = (1.0 / nx as f64, (hi - lo) / ny as f64);
+    let mut cells = Vec::with_capacity(nx * ny);
+    for i in 0..nx {
+        for j in 0..ny {
+            let (ph, u) = (cell(i, nx, 0.0, 1.0), cell(j, ny, lo, hi));
+            let colour = if u > (TAU * ph).cos() {
+                let stripe = ((i + j) / 3) % 2 == 0;
+                if stripe {
+                    RGBColor(150, 150, 150)
+                } else {
+                    RGBColor(205, 205, 205)
+                }
+            } else {
+                diverging(compress(energy_ratio(e, TAU * ph, u)) / scale)
+            };
+            let x0 = i as f64 * dx;
+            let y0 = lo + j as f64 * dy;
+            cells.push(Rectangle::new(
+                [(x0, y0), (x0 + dx, y0 + dy)],
+                colour.filled(),
+            ));
+        }
+    }
+    chart.draw_series(cells)?;
+    // The lines where contact is possible (u <= cos φ) and inside the chart, as pieces.
+    let pieces = |f: &dyn Fn(f64) -> f64| -> Vec<Vec<(f64, f64)>> {
+        let mut out: Vec<Vec<(f64, f64)>> = vec![Vec::new()];
+        for k in 0..=1440 {
+            let ph = f64::from(k) / 1440.0;
+            let u = f(TAU * ph);
+            if u >= lo && u <= hi && u <= (TAU * ph).cos() + 1e-12 {
+                out.last_mut().expect("one piece").push((ph, u));
+            } else if out.last().is_some_and(|p| !p.is_empty()) {
+                out.push(Vec::new());
+            }
+        }
+        out
+    };
+    for piece in pieces(&|phi| neutral(e, phi)) {
+        plot::thick_line(&mut chart, &piece, NEUTRAL, 2)?;
+    }
+    for piece in pieces(&|phi| phi.cos()) {
+        plot::thick_line(&mut chart, &piece, GRAZING, 3)?;
+    }
+    let r = if impacts.len() > 3000 { 2 } else { 3 };
+    chart.draw_series(
+        impacts
+            .iter()
+            .filter(|i| i.1 >= lo && i.1 <= hi)
+            .map(|&(ph, u, s)| Circle::new((ph, u), r, plot::ramp(s).filled())),
+    )?;
+    colour_bar(&right, vmax, scale)
+}
+
+/// A vertical colour bar with ticks at round values of ΔK/ΔK0.
+fn colour_bar(area: &Area<'_>, vmax: f64, scale: f64) -> DrawResult {
+    let (_, h) = area.dim_in_pixel();
+    let (top, bottom) = (40i32, h as i32 - 80);
+    let (x0, x1) = (20i32, 48i32);
+    let y_of = |t: f64| bottom - ((t + 1.0) * 0.5 * f64::from(bottom - top)).round() as i32;
+    for y in top..=bottom {
+        let t = 2.0 * f64::from(bottom - y) / f64::from(bottom - top) - 1.0;
+        area.draw(&Rectangle::new(
+            [(x0, y), (x1, y + 1)],
+            diverging(t).filled(),
+        ))?;
+    }
+    area.draw(&Rectangle::new(
+        [(x0, top), (x1, bottom)],
+        RGBColor(60, 60, 60).stroke_width(1),
+    ))?;
+    let style = plot::left((FONT, 15).into_font().color(&BLACK));
+    for v in [
+        -100.0, -50.0, -20.0, -10.0, -5.0, -2.0, -1.0, 0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0,
+    ] {
+        if v != 0.0 && f64::abs(v) > vmax {
+            continue;
+        }
+        let y = y_of(compress(v) / scale);
+        area.draw(&PathElement::new(
+            [(x1, y), (x1 + 6, y)],
+            BLACK.stroke_width(1),
+        ))?;
+        area.draw(&Text::new(plot::tick(&v), (x1 + 10, y), style.clone()))?;
+    }
+    area.draw(&Text::new(
+        "ΔK/ΔK0",
+        (x0 - 4, top - 20),
+        plot::left((FONT, 17).into_font().color(&BLACK)),
+    ))?;
+    Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn energy_ratio_of_the_first_impact_and_the_neutral_lines() {
+        let e = 0.85;
+        // The first impact (mass at rest, plate at full speed) is the unit.
+        assert!((energy_ratio(e, 0.0, 0.0) - 1.0).abs() < 1e-15);
+        for phi in [0.0, 0.3, 1.0, 2.0, 3.0] {
+            // Both lines of Eq. 14 have ΔK = 0 …
+            assert!(energy_ratio(e, phi, phi.cos()).abs() < 1e-14);
+            assert!(energy_ratio(e, phi, neutral(e, phi)).abs() < 1e-12);
+            // … and between them the impact adds energy when cos φ > 0.
+            if phi.cos() > 0.0 {
+                let mid = 0.5 * (phi.cos() + neutral(e, phi));
+                assert!(energy_ratio(e, phi, mid) > 0.0);
+                assert!(energy_ratio(e, phi, neutral(e, phi) - 1.0) < 0.0);
+            }
+        }
+    }
+}
