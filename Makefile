@@ -40,6 +40,21 @@ demo: build $(DEMO_TARGETS)
 		--impacts $(OUT)/baseline_impacts.csv --plot $(OUT)/baseline --json > $(OUT)/baseline_summary.json
 	$(BISTABLE) simulate --omega 0.2 --velocity 0.05 --t-end 60 \
 		--impacts $(OUT)/chatter_impacts.csv --plot $(OUT)/chatter --json > $(OUT)/chatter_summary.json
+	# The paper's analyses: classes, map (Fig. 9; resumes from an existing map.csv), bifurcation
+	# diagram with orbit branches (Fig. 6/8), continuation of period-1 orbits (Fig. 11a),
+	# energy map with a chaotic run's impacts, spectra of a periodic and a chaotic response.
+	$(BISTABLE) classify --omega 0.85 --velocity 0.11 > $(OUT)/classify_0.85_0.11.json
+	$(BISTABLE) classify --omega 0.85 --velocity 0.15 > $(OUT)/classify_0.85_0.15.json
+	$(BISTABLE) thresholds --json > $(OUT)/thresholds.json
+	$(BISTABLE) map --omega-range 0.2:3.5:60 --velocity-range 0.005:0.2:40 \
+		--out $(OUT)/map.csv --plot $(OUT)/map.png --json > $(OUT)/map_summary.json
+	$(BISTABLE) bifurcation --param omega --range 2.0:2.7:141 --velocity 0.07 \
+		--out $(OUT)/bifurcation.csv --plot $(OUT)/bifurcation.png --json > $(OUT)/bifurcation_summary.json
+	$(BISTABLE) orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 \
+		--out $(OUT)/orbits.csv --plot $(OUT)/orbits.png --json > $(OUT)/orbits_summary.json
+	$(BISTABLE) energy-map --overlay --omega 2.45 --velocity 0.07 --periods 300 --plot $(OUT)/energy_map.png
+	$(BISTABLE) spectrum --omega 2.2 --velocity 0.07 --plot $(OUT)/spectrum_p2.png --json > $(OUT)/spectrum_p2.json
+	$(BISTABLE) spectrum --omega 2.45 --velocity 0.07 --plot $(OUT)/spectrum_chaos.png --json > $(OUT)/spectrum_chaos.json
 	@echo "demo: results in $(OUT)/"
 
 ## Criterion benches and the work-precision comparison with SciPy (writes docs/benchmarks.md).
