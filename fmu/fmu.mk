@@ -55,5 +55,5 @@ fmu-bench: setup fmu fmu-host
 fmu-demo: setup fmu
 	mkdir -p $(OUT)
 	.venv/bin/fmpy validate $(FMU)
-	.venv/bin/fmpy simulate $(FMU) --output-file $(OUT)/fmu_baseline.csv
+	.venv/bin/fmpy simulate $(FMU) --output-interval 0.01 --output-file $(OUT)/fmu_baseline.csv
 	@echo "fmu-demo: $(OUT)/fmu_baseline.csv (paper baseline through the FMU, default experiment)"

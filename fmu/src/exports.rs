@@ -678,3 +678,23 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
         inst.other_status(s).map(|_| None)
     })
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_panic_is_caught_and_puts_the_instance_into_the_error_state() {
+        let inst = Instance::new(c"t".into(), ptr::null_mut(), None, false);
+        let c: fmi2Component = Box::into_raw(Box::new(inst)).cast();
+        let status = call(c, "fmi2Test", allowed::ANY, |_| panic!("boom"));
+        assert_eq!(status, fmi2Error);
+        // SAFETY: `c` is the live instance made above.
+        let inst = unsafe { instance(c) }.unwrap();
+        assert_eq!(inst.lifecycle, Lifecycle::Error);
+        // Only what the standard allows in the error state still works.
+        assert_eq!(unsafe { fmi2DoStep(c, 0.0, 1.0, 0) }, fmi2Error);
+        assert_eq!(unsafe { fmi2Reset(c) }, fmi2OK);
+        unsafe { fmi2FreeInstance(c) };
+    }
+}
