@@ -82,7 +82,7 @@ pub struct BifurcationArgs {
     pub param: Param,
 
     /// Values of the control parameter, A:B:N (N evenly spaced values, ends included).
-    #[arg(long, value_name = "A:B:N")]
+    #[arg(long, value_name = "A:B:N", allow_hyphen_values = true)]
     pub range: Range,
 
     /// Fixed Ω when --param velocity (> 0).

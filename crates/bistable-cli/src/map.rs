@@ -75,11 +75,21 @@ Examples:
 #[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot"])))]
 pub struct MapArgs {
     /// Ω values A:B:N (N evenly spaced values from A to B, ends included; Ω > 0).
-    #[arg(long, value_name = "A:B:N", default_value = "0.2:3.5:300")]
+    #[arg(
+        long,
+        value_name = "A:B:N",
+        default_value = "0.2:3.5:300",
+        allow_hyphen_values = true
+    )]
     pub omega_range: Range,
 
     /// V values A:B:N (V >= 0; the paper's map is V ∈ (0, 0.2]).
-    #[arg(long, value_name = "A:B:N", default_value = "0.001:0.2:200")]
+    #[arg(
+        long,
+        value_name = "A:B:N",
+        default_value = "0.001:0.2:200",
+        allow_hyphen_values = true
+    )]
     pub velocity_range: Range,
 
     /// Append one row per point to FILE.csv, skipping points already in it (see below).

@@ -99,7 +99,12 @@ pub struct OrbitArgs {
     pub settle: u32,
 
     /// Continue the orbits over Ω = A:B:N for each --velocity.
-    #[arg(long, value_name = "A:B:N", help_heading = "Continuation")]
+    #[arg(
+        long,
+        value_name = "A:B:N",
+        allow_hyphen_values = true,
+        help_heading = "Continuation"
+    )]
     pub continue_omega: Option<Range>,
 
     /// Draw the continued branches to FILE.png.

@@ -1,0 +1,595 @@
+//! End-to-end tests of the analysis subcommands (`classify`, `map`, `bifurcation`, `orbit`,
+//! `thresholds`, `energy-map`, `spectrum`): the built binary is run as a user would, and its
+//! results are checked against the paper and against the core.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
+use serde_json::Value;
+
+fn bistable(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bistable"))
+        .args(args)
+        .output()
+        .expect("run bistable")
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+/// Runs and parses the JSON on stdout; panics with stderr on failure.
+fn json(args: &[&str]) -> Value {
+    let o = bistable(args);
+    assert!(o.status.success(), "{args:?}: {}", stderr(&o));
+    serde_json::from_slice(&o.stdout)
+        .unwrap_or_else(|e| panic!("{args:?}: {e}: {}", String::from_utf8_lossy(&o.stdout)))
+}
+
+/// A fresh directory for one test's files.
+fn scratch(name: &str) -> PathBuf {
+    let dir = std::env::temp_dir().join(format!(
+        "bistable-cli-analyses-{}-{name}",
+        std::process::id()
+    ));
+    let _ = std::fs::remove_dir_all(&dir);
+    std::fs::create_dir_all(&dir).unwrap();
+    dir
+}
+
+fn s(p: &Path) -> &str {
+    p.to_str().unwrap()
+}
+
+/// Asserts that `path` is a PNG of at least 800 × 600 pixels.
+fn assert_png(path: &Path) {
+    let bytes = std::fs::read(path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    assert_eq!(&bytes[..8], b"\x89PNG\r\n\x1a\n", "{}", path.display());
+    let w = u32::from_be_bytes(bytes[16..20].try_into().unwrap());
+    let h = u32::from_be_bytes(bytes[20..24].try_into().unwrap());
+    assert!(w >= 800 && h >= 600, "{}: {w} × {h}", path.display());
+}
+
+/// CSV rows as maps from column name to text.
+fn csv_rows(path: &Path) -> Vec<std::collections::HashMap<String, String>> {
+    let text = std::fs::read_to_string(path).unwrap();
+    let mut lines = text.lines();
+    let header: Vec<String> = lines
+        .next()
+        .unwrap()
+        .split(',')
+        .map(str::to_string)
+        .collect();
+    lines
+        .map(|l| {
+            header
+                .iter()
+                .cloned()
+                .zip(l.split(',').map(str::to_string))
+                .collect()
+        })
+        .collect()
+}
+
+const CLASSIFY_KEYS: [&str; 12] = [
+    "class",
+    "period",
+    "chaotic",
+    "snap_throughs",
+    "final_well",
+    "at_rest_in_second_well",
+    "periods_simulated",
+    "lyapunov",
+    "impacts_per_period",
+    "stopped_early",
+    "wall_time_s",
+    "sticking",
+];
+
+#[test]
+fn classify_reports_the_paper_classes() {
+    let c = json(&["classify", "--omega", "0.85", "--velocity", "0.11"]);
+    for k in CLASSIFY_KEYS {
+        assert!(c.get(k).is_some(), "missing key {k}: {c}");
+    }
+    assert_eq!(c["class"], "intrawell");
+    assert_eq!(c["period"], 4);
+    assert_eq!(c["impacts_per_period"], 5);
+    assert_eq!(c["chaotic"], false);
+    assert_eq!(c["snap_throughs"], 0);
+    assert_eq!(c["final_well"], 1);
+    assert_eq!(c["at_rest_in_second_well"], false);
+    assert_eq!(c["stopped_early"], true);
+    assert!(c["periods_simulated"].as_f64().unwrap() < 20_000.0);
+
+    let c = json(&["classify", "--omega", "0.85", "--velocity", "0.15"]);
+    assert_eq!(c["class"], "transient_interwell");
+    assert_eq!(c["at_rest_in_second_well"], true);
+    assert_eq!(c["final_well"], 2);
+    assert_eq!(c["snap_throughs"], 1);
+
+    // --full runs the whole length and decides the same class.
+    let c = json(&[
+        "classify",
+        "--omega",
+        "0.85",
+        "--velocity",
+        "0.11",
+        "--full",
+        "--max-periods",
+        "400",
+    ]);
+    assert_eq!(c["stopped_early"], false);
+    assert!(
+        (c["periods_simulated"].as_f64().unwrap() - 400.0).abs() < 2.0,
+        "{c}"
+    );
+    assert_eq!(
+        (c["class"].as_str(), c["period"].as_u64()),
+        (Some("intrawell"), Some(4))
+    );
+}
+
+#[test]
+fn period_doubling_into_chaos_at_v_0_07() {
+    let dir = scratch("bifurcation");
+    let (csv, png) = (dir.join("bif.csv"), dir.join("bif.png"));
+    // Ω = 2.0 + 0.005·i: 2.2 is i = 40, 2.245 is i = 49, 2.45 is i = 90.
+    let b = json(&[
+        "bifurcation",
+        "--param",
+        "omega",
+        "--range",
+        "2.0:2.7:141",
+        "--velocity",
+        "0.07",
+        "--out",
+        s(&csv),
+        "--plot",
+        s(&png),
+        "--json",
+    ]);
+    assert_png(&png);
+    let points = b["points"].as_array().unwrap();
+    assert_eq!(points.len(), 141);
+    let distinct = |i: usize| points[i]["distinct_max_x"].as_u64().unwrap();
+    assert_eq!(distinct(0), 1, "Ω = 2.0: period 1");
+    assert_eq!(distinct(40), 2, "Ω = 2.2: period 2");
+    assert_eq!(distinct(49), 4, "Ω = 2.245: period 4");
+    assert!(distinct(90) > 50, "Ω = 2.45: chaos, {}", distinct(90));
+    // The cascade in order: the number of distinct maxima only doubles up to chaos.
+    let first_chaos = (0..141).find(|&i| distinct(i) > 16).unwrap();
+    let counts: Vec<u64> = (0..first_chaos).map(distinct).collect();
+    assert!(
+        counts.windows(2).all(|w| w[1] == w[0] || w[1] == 2 * w[0]),
+        "{counts:?}"
+    );
+    for p in [1, 2, 4] {
+        assert!(counts.contains(&p), "{counts:?}");
+    }
+    // The CSV has 100 maxima per point and the impact phases in [0, 1).
+    let rows = csv_rows(&csv);
+    let maxima = rows.iter().filter(|r| r["kind"] == "max_x").count();
+    assert_eq!(maxima, 141 * 100);
+    assert!(rows
+        .iter()
+        .filter(|r| r["kind"] == "impact_phase")
+        .all(|r| (0.0..1.0).contains(&r["value"].parse::<f64>().unwrap())));
+    // Orbits: stable period 1 at Ω = 2.0; at 2.2 the period-1 orbit is unstable with a
+    // multiplier below −1 (it doubled) and a stable period-2 orbit exists.
+    let orbits = csv_rows(&dir.join("bif_orbits.csv"));
+    let at = |w: f64, p: &str| {
+        orbits
+            .iter()
+            .filter(|r| (r["omega"].parse::<f64>().unwrap() - w).abs() < 1e-12 && r["period"] == p)
+            .collect::<Vec<_>>()
+    };
+    assert!(at(2.0, "1").iter().any(|r| r["stable"] == "true"));
+    let p1 = at(2.2, "1");
+    assert!(p1.iter().any(|r| r["stable"] == "false"
+        && r["multiplier_1_re"].parse::<f64>().unwrap() < -1.0
+        && r["multiplier_1_im"].parse::<f64>().unwrap() == 0.0));
+    assert!(at(2.2, "2").iter().any(|r| r["stable"] == "true"));
+}
+
+#[test]
+fn lyapunov_exponent_positive_in_chaos_negative_on_periodic_branches() {
+    let c = json(&["classify", "--omega", "2.45", "--velocity", "0.07"]);
+    assert_eq!(c["period"], Value::Null);
+    assert_eq!(c["chaotic"], true);
+    assert!(c["lyapunov"].as_f64().unwrap() > 0.01, "{c}");
+    // The periodic attractors at 2.0 (P-1) and 2.2 (P-2): stable, negative Floquet exponent.
+    for (w, p) in [("2.0", "1"), ("2.2", "2")] {
+        let o = json(&[
+            "orbit",
+            "--omega",
+            w,
+            "--velocity",
+            "0.07",
+            "--period",
+            p,
+            "--json",
+        ]);
+        assert_eq!(o["stable"], true, "{o}");
+        assert!(o["floquet_exponent"].as_f64().unwrap() < -1e-3, "{o}");
+        assert!(o["max_abs_multiplier"].as_f64().unwrap() < 1.0);
+    }
+}
+
+#[test]
+fn stable_orbit_is_the_long_run_attractor() {
+    let o = json(&["orbit", "--omega", "1.75", "--velocity", "0.07", "--json"]);
+    assert_eq!(o["stable"], true);
+    assert_eq!(o["period"], 1);
+    assert_eq!(o["impacts"], 1);
+    assert!(o["det_relative_error"].as_f64().unwrap() < 1e-9, "{o}");
+    let m = &o["monodromy"];
+    let det = m[0][0].as_f64().unwrap() * m[1][1].as_f64().unwrap()
+        - m[0][1].as_f64().unwrap() * m[1][0].as_f64().unwrap();
+    let identity = 0.85f64.powi(2) * (-2.0 * 0.02 * std::f64::consts::TAU / 1.75).exp();
+    assert!(((det - identity) / identity).abs() < 1e-9);
+    // The section point of a long run with the core, 3000 shaker periods from rest.
+    let plate = Sinusoid::new(1.75, 0.07).unwrap();
+    let mut sim = Simulator::new(Params::paper(), plate.into(), SolverOptions::default()).unwrap();
+    sim.advance_instant(plate.section(3000), &mut |_: &Event| {})
+        .unwrap();
+    let st = sim.state();
+    let (x0, v0) = (o["x0"].as_f64().unwrap(), o["v0"].as_f64().unwrap());
+    assert!(
+        (x0 - st.x).abs() < 1e-9 && (v0 - st.v).abs() < 1e-9,
+        "{x0} {v0} vs {st:?}"
+    );
+    // From a rough guess Newton finds the same orbit.
+    let g = json(&[
+        "orbit",
+        "--omega",
+        "1.75",
+        "--velocity",
+        "0.07",
+        "--guess",
+        "0.05,0",
+        "--json",
+    ]);
+    assert!((g["x0"].as_f64().unwrap() - x0).abs() < 1e-9);
+    assert!(g["iterations"].as_u64().unwrap() > 1);
+}
+
+#[test]
+fn orbit_continuation_writes_branches_and_plot() {
+    let dir = scratch("continuation");
+    let (csv, png) = (dir.join("orbits.csv"), dir.join("orbits.png"));
+    let c = json(&[
+        "orbit",
+        "--continue-omega",
+        "1.6:2.4:17",
+        "--velocity",
+        "0.05,0.07",
+        "--settle",
+        "500",
+        "--out",
+        s(&csv),
+        "--plot",
+        s(&png),
+        "--json",
+    ]);
+    assert_png(&png);
+    let branches = c["branches"].as_array().unwrap();
+    assert_eq!(branches.len(), 2);
+    for b in branches {
+        assert!(b["orbits"].as_u64().unwrap() >= 17, "{b}");
+    }
+    let rows = csv_rows(&csv);
+    // At V = 0.07 the period-1 orbit is stable at Ω = 1.75 … and unstable past the doubling.
+    let stable_at = |w: f64| {
+        rows.iter()
+            .filter(|r| {
+                r["velocity"] == "0.07" && (r["omega"].parse::<f64>().unwrap() - w).abs() < 1e-12
+            })
+            .map(|r| r["stable"] == "true")
+            .collect::<Vec<_>>()
+    };
+    assert!(stable_at(1.8).contains(&true));
+    assert!(stable_at(2.4).contains(&false));
+}
+
+fn map_args<'a>(csv: &'a str, png: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut a = vec![
+        "map",
+        "--omega-range",
+        "0.85:1.85:3",
+        "--velocity-range",
+        "0.11:0.15:3",
+        "--out",
+        csv,
+        "--plot",
+        png,
+        "--json",
+    ];
+    a.extend_from_slice(extra);
+    a
+}
+
+#[test]
+fn map_writes_resumes_and_classifies() {
+    let dir = scratch("map");
+    let (csv, png) = (dir.join("map.csv"), dir.join("map.png"));
+    let m = json(&map_args(s(&csv), s(&png), &[]));
+    assert_eq!(
+        (m["points"].as_u64(), m["computed"].as_u64()),
+        (Some(9), Some(9))
+    );
+    assert_png(&png);
+    let rows = csv_rows(&csv);
+    assert_eq!(rows.len(), 9);
+    let row = |w: &str, v: &str| {
+        rows.iter()
+            .find(|r| r["omega"] == w && r["velocity"] == v)
+            .unwrap_or_else(|| panic!("no row for {w}, {v}"))
+    };
+    assert_eq!(row("0.85", "0.11")["class"], "intrawell");
+    assert_eq!(row("0.85", "0.11")["period"], "4");
+    assert_eq!(row("0.85", "0.15")["class"], "transient_interwell");
+    assert_eq!(row("0.85", "0.15")["at_rest_in_second_well"], "true");
+    assert_eq!(row("0.85", "0.15")["final_well"], "2");
+
+    // A rerun skips every point.
+    let again = json(&map_args(s(&csv), s(&png), &[]));
+    assert_eq!(
+        (again["computed"].as_u64(), again["resumed"].as_u64()),
+        (Some(0), Some(9))
+    );
+    assert_eq!(csv_rows(&csv).len(), 9);
+
+    // An interrupted run: two rows lost and half a row written. Only those two are redone.
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let lines: Vec<&str> = text.lines().collect();
+    let mut cut = lines[..lines.len() - 2].join("\n");
+    cut.push('\n');
+    cut.push_str(&lines[lines.len() - 1][..10]);
+    std::fs::write(&csv, cut).unwrap();
+    let resumed = json(&map_args(s(&csv), s(&png), &[]));
+    assert_eq!(resumed["computed"].as_u64(), Some(2));
+    assert_eq!(resumed["resumed"].as_u64(), Some(7));
+    let rows = csv_rows(&csv);
+    assert_eq!(rows.len(), 9);
+    assert!(rows.iter().all(|r| r.len() == 16), "no broken rows");
+
+    // The same file with another restitution is refused (exit 2, naming --out).
+    let o = bistable(&map_args(s(&csv), s(&png), &["--restitution", "0.7"]));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--out") && stderr(&o).contains("e = 0.85"),
+        "{}",
+        stderr(&o)
+    );
+}
+
+#[test]
+fn map_for_the_experimental_restitution() {
+    let dir = scratch("map07");
+    let (csv, png) = (dir.join("m.csv"), dir.join("m.png"));
+    let m = json(&[
+        "map",
+        "--restitution",
+        "0.7",
+        "--omega-range",
+        "0.5:3:6",
+        "--velocity-range",
+        "0.02:0.2:4",
+        "--out",
+        s(&csv),
+        "--plot",
+        s(&png),
+        "--json",
+    ]);
+    assert_eq!(m["computed"].as_u64(), Some(24));
+    assert_png(&png);
+    let rows = csv_rows(&csv);
+    assert!(rows.iter().all(|r| r["restitution"] == "0.7"));
+    let v = |r: &std::collections::HashMap<String, String>| r["velocity"].parse::<f64>().unwrap();
+    // Far below the interwell threshold (1−e)/(2(1+e)) = 0.088 the motion stays in well 1;
+    // above the single-impact threshold 1/(4(1+e)) = 0.147 the first impact clears the barrier.
+    assert!(rows
+        .iter()
+        .filter(|r| v(r) < 0.03)
+        .all(|r| r["class"] == "intrawell"));
+    assert!(rows
+        .iter()
+        .filter(|r| v(r) > 0.147)
+        .all(|r| r["snap_throughs"].parse::<u64>().unwrap() >= 1));
+}
+
+#[test]
+fn thresholds_energy_map_and_spectrum() {
+    let t = json(&[
+        "thresholds",
+        "--restitution",
+        "0.7",
+        "--omega",
+        "0.3",
+        "--json",
+    ]);
+    assert!((t["single_impact"].as_f64().unwrap() - 1.0 / 6.8).abs() < 1e-15);
+    assert!((t["interwell"].as_f64().unwrap() - 0.3 / 3.4).abs() < 1e-15);
+    assert!((t["quasi_static"].as_f64().unwrap() - 0.15).abs() < 1e-15);
+    let text = bistable(&["thresholds"]);
+    assert!(String::from_utf8_lossy(&text.stdout).contains("0.135135"));
+
+    let dir = scratch("figures");
+    let em = dir.join("em.png");
+    let o = bistable(&[
+        "energy-map",
+        "--overlay",
+        "--omega",
+        "1.75",
+        "--velocity",
+        "0.07",
+        "--periods",
+        "50",
+        "--plot",
+        s(&em),
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_png(&em);
+
+    let sp = |w: &str| {
+        json(&[
+            "spectrum",
+            "--omega",
+            w,
+            "--velocity",
+            "0.07",
+            "--record",
+            "256",
+            "--plot",
+            s(&dir.join(format!("sp{w}.png"))),
+            "--json",
+        ])
+    };
+    let periodic = sp("2.2");
+    let chaotic = sp("2.45");
+    assert_eq!(periodic["period"], 2);
+    assert!((periodic["peak_freq_over_omega"].as_f64().unwrap() - 0.5).abs() < 1e-12);
+    assert_eq!(chaotic["period"], Value::Null);
+    // Chaos is broadband: the spectrum is many orders of magnitude flatter.
+    let (fp, fc) = (
+        periodic["spectral_flatness"].as_f64().unwrap(),
+        chaotic["spectral_flatness"].as_f64().unwrap(),
+    );
+    assert!(fc > 1e-4 && fc > 1e6 * fp, "{fc} vs {fp}");
+    assert_png(&dir.join("sp2.45.png"));
+}
+
+#[test]
+fn bad_input_exits_2_naming_the_option() {
+    let cases: &[(&[&str], &str)] = &[
+        (
+            &["classify", "--omega", "0.85", "--velocity", "-1"],
+            "--velocity",
+        ),
+        (
+            &["classify", "--omega", "0", "--velocity", "0.1"],
+            "--omega",
+        ),
+        (
+            &[
+                "classify",
+                "--omega",
+                "1",
+                "--velocity",
+                "0.1",
+                "--max-periods",
+                "0",
+            ],
+            "--max-periods",
+        ),
+        (
+            &["map", "--omega-range", "1:2", "--plot", "x.png"],
+            "--omega-range",
+        ),
+        (
+            &["map", "--velocity-range", "-0.1:0.2:5", "--plot", "x.png"],
+            "--velocity-range",
+        ),
+        (&["map", "--threads", "0", "--plot", "x.png"], "--threads"),
+        (&["map", "--omega-range", "0.5:1:3"], "--out"),
+        (
+            &[
+                "bifurcation",
+                "--param",
+                "omega",
+                "--range",
+                "2:2.7:10",
+                "--json",
+            ],
+            "--velocity",
+        ),
+        (
+            &[
+                "bifurcation",
+                "--param",
+                "velocity",
+                "--range",
+                "0:0.2:0",
+                "--omega",
+                "1",
+                "--json",
+            ],
+            "--range",
+        ),
+        (
+            &[
+                "orbit",
+                "--omega",
+                "1.75",
+                "--velocity",
+                "0.07",
+                "--period",
+                "0",
+            ],
+            "--period",
+        ),
+        (
+            &["orbit", "--omega", "1.75", "--velocity", "0.05,0.07"],
+            "--velocity",
+        ),
+        (
+            &[
+                "orbit",
+                "--omega",
+                "1.75",
+                "--velocity",
+                "0.07",
+                "--guess",
+                "1",
+            ],
+            "--guess",
+        ),
+        (&["thresholds", "--restitution", "1"], "--restitution"),
+        (
+            &["energy-map", "--plot", "x.png", "--u-range", "3:1"],
+            "--u-range",
+        ),
+        (
+            &["energy-map", "--plot", "x.png", "--omega", "1"],
+            "--overlay",
+        ),
+        (
+            &[
+                "spectrum",
+                "--omega",
+                "2",
+                "--velocity",
+                "0.07",
+                "--record",
+                "2",
+            ],
+            "--record",
+        ),
+    ];
+    for (args, option) in cases {
+        let o = bistable(args);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(option), "{args:?}: {}", stderr(&o));
+        assert!(o.stdout.is_empty(), "{args:?}");
+    }
+}
+
+#[test]
+fn every_analysis_has_help() {
+    for (cmd, needle) in [
+        ("classify", "intrawell"),
+        ("map", "Resuming"),
+        ("bifurcation", "Hermite"),
+        ("orbit", "Floquet"),
+        ("thresholds", "1/(4(1+e))"),
+        ("energy-map", "grazing"),
+        ("spectrum", "Hann"),
+    ] {
+        let o = bistable(&[cmd, "--help"]);
+        assert!(o.status.success(), "{cmd}");
+        let text = String::from_utf8_lossy(&o.stdout);
+        assert!(text.contains(needle), "{cmd} --help lacks '{needle}'");
+    }
+}
