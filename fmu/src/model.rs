@@ -9,7 +9,7 @@ use std::ops::ControlFlow;
 
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Instant, Observer, ParamError, Params,
-    PlateMotion, PolyPiece, SimError, Simulator, Sinusoid, SolverOptions, StepView,
+    PlateMotion, PlateRecord, PolyPiece, SimError, Simulator, Sinusoid, SolverOptions, StepView,
 };
 
 use crate::md::var;
@@ -263,8 +263,20 @@ impl Model {
     /// Rebuilds a model from its saved parts (see `state.rs`).
     pub fn restore(values: &[f64], saved: &SavedModel) -> Result<Self, String> {
         let scale = Scale::of(values);
-        let sim =
-            Simulator::from_checkpoint(&saved.checkpoint).map_err(|e| describe(&e, &scale))?;
+        let cp = &saved.checkpoint;
+        let same = [
+            (cp.zeta, values[var::zeta]),
+            (cp.restitution, values[var::e]),
+            (cp.tol, values[var::tol]),
+        ];
+        if same.iter().any(|(a, b)| a != b) {
+            return Err("the FMU state's simulator does not match its parameters".into());
+        }
+        let external = matches!(cp.plate, PlateRecord::Poly { .. });
+        if external != (ShakerMode::of(values[var::shaker_mode]) == Some(ShakerMode::External)) {
+            return Err("the FMU state's plate does not match its shaker_mode".into());
+        }
+        let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
         let (omega, v, hi, lo, phase0, offset) = saved.phase_ref;
         let origin = Instant::from_parts(hi, lo).ok_or("invalid phase origin in the FMU state")?;
         let phase_ref = Sinusoid::new(omega, v)

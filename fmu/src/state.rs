@@ -483,5 +483,13 @@ mod tests {
         }
         let err = crate::instance::Instance::validate(&s).err().unwrap();
         assert!(err.contains("u0"), "{err}");
+        let mut s = samples()[0].clone();
+        s.values[var::zeta] = 0.5;
+        let err = crate::instance::Instance::validate(&s).err().unwrap();
+        assert!(err.contains("does not match its parameters"), "{err}");
+        let mut s = samples()[0].clone();
+        s.values[var::shaker_mode] = 2.0;
+        let err = crate::instance::Instance::validate(&s).err().unwrap();
+        assert!(err.contains("shaker_mode"), "{err}");
     }
 }
