@@ -131,7 +131,7 @@ impl Instance {
             env,
             logger,
             logging_on,
-            enabled: vec![true; CATEGORIES.len()],
+            enabled: vec![logging_on; CATEGORIES.len()],
             lifecycle: Lifecycle::Instantiated,
             values: start_values(),
             derivatives: [None; MAX_PLATE_ORDER + 1],
@@ -268,7 +268,6 @@ impl Instance {
         let model = self.start_model()?;
         self.model = Some(model);
         self.log_events();
-        self.clear_derivatives();
         self.last_successful_time = self.start_time;
         self.lifecycle = Lifecycle::StepComplete;
         Ok(fmi2OK)

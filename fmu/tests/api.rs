@@ -600,3 +600,62 @@ fn a_later_start_time_shifts_the_run_and_the_shaker_phase() {
     let s = unsafe { fmi2DoStep(f.c, 120.0, 1.0, 0) };
     f.assert_refused(s, "beyond stopTime = 120");
 }
+
+#[test]
+fn debug_logging_follows_the_enabled_categories() {
+    let mut f = Fmu::new();
+    unsafe {
+        // Instantiated with logging on: events are logged.
+        assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
+        let none: [fmi2String; 0] = [];
+        assert_eq!(
+            fmi2SetDebugLogging(f.c, fmi2False, 0, none.as_ptr()),
+            fmi2OK
+        );
+        assert_eq!(fmi2EnterInitializationMode(f.c), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(f.c), fmi2OK);
+        assert_eq!(f.step(20.0), fmi2OK);
+        assert!(f.messages().is_empty(), "{:?}", f.messages());
+        // Only logEvents on: impacts appear, with the category.
+        let events = CString::new("logEvents").unwrap();
+        assert_eq!(
+            fmi2SetDebugLogging(f.c, fmi2True, 1, &events.as_ptr()),
+            fmi2OK
+        );
+        assert_eq!(f.step(20.0), fmi2OK);
+        let log = f.log.lock().unwrap();
+        assert!(log.len() >= 3);
+        assert!(log.iter().all(|(s, c, _)| *s == fmi2OK && c == "logEvents"));
+    }
+}
+
+#[test]
+fn input_derivatives_set_during_initialization_shape_the_first_step() {
+    let run = |orders: &[i32]| {
+        let f = Fmu::new();
+        unsafe {
+            assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
+            assert_eq!(fmi2EnterInitializationMode(f.c), fmi2OK);
+            assert_eq!(
+                f.set(&[(var::shaker_mode, 2.0), (var::zdot_in, 0.07)]),
+                fmi2OK
+            );
+            let vals = vec![-0.5; orders.len()];
+            let vrs = vec![vr(var::zdot_in); orders.len()];
+            let s = fmi2SetRealInputDerivatives(
+                f.c,
+                vrs.as_ptr(),
+                orders.len(),
+                orders.as_ptr(),
+                vals.as_ptr(),
+            );
+            assert_eq!(s, fmi2OK);
+            assert_eq!(fmi2ExitInitializationMode(f.c), fmi2OK);
+            assert_eq!(fmi2DoStep(f.c, 0.0, 0.5, 0), fmi2OK);
+        }
+        f.real(var::zdot)
+    };
+    // zdot(0.5) = 0.07 - 0.5 * 0.5 with the acceleration given, 0.07 without.
+    assert!((run(&[1]) - (0.07 - 0.25)).abs() < 1e-15);
+    assert!((run(&[]) - 0.07).abs() < 1e-15);
+}
