@@ -451,7 +451,6 @@ impl Instance {
         };
         let now = model.time;
         let t_end = tc + h;
-        let slack = |t: f64| 1e-9 * t.abs().max(1.0);
         let valid = h.is_finite()
             && h > 0.0
             && (tc - now).abs() <= slack(now)
@@ -621,13 +620,18 @@ impl Instance {
     }
 }
 
+/// Rounding allowance (s) when comparing a host's time with the FMU's time `t` (s).
+fn slack(t: f64) -> f64 {
+    1e-9 * t.abs().max(1.0)
+}
+
 /// Why `fmi2DoStep(tc, h)` is refused at the FMU time `now` (s).
 #[cold]
 fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>) -> String {
     let t_end = tc + h;
     if !(h.is_finite() && h > 0.0) {
         format!("communicationStepSize = {h} s must be finite and > 0")
-    } else if !tc.is_finite() || (tc - now).abs() > 1e-9 * now.abs().max(1.0) {
+    } else if !tc.is_finite() || (tc - now).abs() > slack(now) {
         format!("currentCommunicationPoint = {tc} s does not match the FMU's time {now} s")
     } else if t_end <= now {
         format!("the step ends at {t_end} s, not after the FMU's time {now} s")
