@@ -69,7 +69,7 @@ pub struct ClassifyArgs {
 
     /// Relative agreement of section points p periods apart that counts as periodic
     /// (in (0, 1e-3]).
-    #[arg(long, value_name = "TOL", default_value_t = 1e-8)]
+    #[arg(long, value_name = "TOL", default_value = "1e-8")]
     pub period_tol: f64,
 
     /// Shaker periods averaged for the Lyapunov exponent of an aperiodic response

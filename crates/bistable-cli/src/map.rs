@@ -40,7 +40,8 @@ Resuming: rows are appended and flushed as points complete (in an interleaved
 order that covers the whole grid early), so an interrupted run loses only the
 points in progress. Run the same command again and the points already in
 --out (same Ω and V to the last bit) are skipped; rows written with another ζ or
-e are refused. The plot always shows every grid point found in the file.";
+e are refused (the other options are not recorded in the file: resume with the
+same ones). The plot always shows every grid point found in the file.";
 
 /// Shown after the options by `bistable map --help`.
 pub const AFTER_HELP: &str = "\

@@ -91,7 +91,12 @@ pub struct OrbitArgs {
     pub period: u32,
 
     /// Initial guess x,x' at plate phase 0 instead of the simulated section point.
-    #[arg(long, value_name = "X,V", allow_negative_numbers = true)]
+    #[arg(
+        long,
+        value_name = "X,V",
+        allow_hyphen_values = true,
+        conflicts_with = "continue_omega"
+    )]
     pub guess: Option<Pair>,
 
     /// Shaker periods simulated from the paper's initial condition for the guess.
