@@ -50,7 +50,7 @@ demo: build $(DEMO_TARGETS)
 		--out $(OUT)/map.csv --plot $(OUT)/map.png --json > $(OUT)/map_summary.json
 	$(BISTABLE) bifurcation --param omega --range 2.0:2.7:141 --velocity 0.07 \
 		--out $(OUT)/bifurcation.csv --plot $(OUT)/bifurcation.png --json > $(OUT)/bifurcation_summary.json
-	$(BISTABLE) orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 \
+	$(BISTABLE) orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 --arclength \
 		--out $(OUT)/orbits.csv --plot $(OUT)/orbits.png --json > $(OUT)/orbits_summary.json
 	$(BISTABLE) energy-map --overlay --omega 2.45 --velocity 0.07 --periods 300 --plot $(OUT)/energy_map.png
 	$(BISTABLE) spectrum --omega 2.2 --velocity 0.07 --plot $(OUT)/spectrum_p2.png --json > $(OUT)/spectrum_p2.json

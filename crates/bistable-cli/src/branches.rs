@@ -14,7 +14,7 @@ use crate::common::Model;
 use crate::error::CliError;
 use crate::output::{CsvFile, Field};
 use crate::parallel;
-use crate::plot::{thick_line, Chart, DrawResult};
+use crate::plot::{dashed_line, thick_line, Chart, DrawResult};
 
 /// Samples per shaker period for the orbits' per-cycle maxima.
 const SAMPLES: u32 = 128;
@@ -215,6 +215,33 @@ impl Branches {
     }
 }
 
+/// Shoots from every seed (in parallel); keeps the orbits that Newton found near their seed.
+pub fn solve_seeds(
+    models: &[Model],
+    seeds: &[Seed],
+    threads: usize,
+) -> Result<Vec<(Seed, Orbit)>, CliError> {
+    let mut out = Vec::new();
+    parallel::run(
+        seeds,
+        threads,
+        &format!("shooting from {} seeds", seeds.len()),
+        |s| {
+            solve(&models[s.point], s.period, s.guess).filter(|o| {
+                (o.orbit.x0 - s.guess.0)
+                    .abs()
+                    .max((o.orbit.v0 - s.guess.1).abs())
+                    <= MAX_SEED_DISTANCE
+            })
+        },
+        |i, o| {
+            out.extend(o.map(|o| (seeds[i], o)));
+            Ok(())
+        },
+    )?;
+    Ok(out)
+}
+
 /// Solves the seeds, then continues each period's orbits over the grid `models` forward and
 /// backward, on `threads` threads. One [`Branches`] per entry of `periods`.
 pub fn build(
@@ -231,26 +258,11 @@ pub fn build(
             links: Vec::new(),
         })
         .collect();
-    parallel::run(
-        seeds,
-        threads,
-        &format!("shooting from {} seeds", seeds.len()),
-        |s| {
-            solve(&models[s.point], s.period, s.guess).filter(|o| {
-                (o.orbit.x0 - s.guess.0)
-                    .abs()
-                    .max((o.orbit.v0 - s.guess.1).abs())
-                    <= MAX_SEED_DISTANCE
-            })
-        },
-        |i, o| {
-            let s = seeds[i];
-            if let (Some(o), Some(b)) = (o, all.iter_mut().find(|b| b.period == s.period)) {
-                b.insert(s.point, o);
-            }
-            Ok(())
-        },
-    )?;
+    for (s, o) in solve_seeds(models, seeds, threads)? {
+        if let Some(b) = all.iter_mut().find(|b| b.period == s.period) {
+            b.insert(s.point, o);
+        }
+    }
     let n = models.len();
     let mut done: Vec<Option<Branches>> = vec![None; all.len()];
     parallel::run(
@@ -347,27 +359,11 @@ pub fn draw(chart: &mut Chart<'_, '_>, b: &Branches, x: &[f64], colour: RGBColor
         linked.extend(path.iter().copied());
         let orbit = |(i, k): (usize, usize)| &b.slots[i][k];
         for r in 0..b.period as usize {
-            // Runs of equal stability; a change of stability splits at the midpoint.
-            let mut run: Vec<(f64, f64)> = Vec::new();
-            let mut stable = orbit(path[0]).orbit.stable;
-            for w in path.windows(2) {
-                let (a, c) = (orbit(w[0]), orbit(w[1]));
-                let pa = (x[w[0].0], a.cycle_max[r]);
-                let pc = (x[w[1].0], c.cycle_max[r]);
-                if run.is_empty() {
-                    run.push(pa);
-                }
-                if c.orbit.stable == stable {
-                    run.push(pc);
-                } else {
-                    let mid = (0.5 * (pa.0 + pc.0), 0.5 * (pa.1 + pc.1));
-                    run.push(mid);
-                    segment(chart, &run, stable, colour)?;
-                    run = vec![mid, pc];
-                    stable = c.orbit.stable;
-                }
-            }
-            segment(chart, &run, stable, colour)?;
+            let pts: Vec<(f64, f64, bool)> = path
+                .iter()
+                .map(|&n| (x[n.0], orbit(n).cycle_max[r], orbit(n).orbit.stable))
+                .collect();
+            draw_curve(chart, &pts, colour)?;
         }
     }
     for (i, slot) in b.slots.iter().enumerate() {
@@ -388,6 +384,32 @@ pub fn draw(chart: &mut Chart<'_, '_>, b: &Branches, x: &[f64], colour: RGBColor
     Ok(())
 }
 
+/// A curve of `(x, y, stable)` points: thick and solid where stable, thin and dashed where
+/// unstable; a change of stability splits the segment at its midpoint.
+pub fn draw_curve(
+    chart: &mut Chart<'_, '_>,
+    pts: &[(f64, f64, bool)],
+    colour: RGBColor,
+) -> DrawResult {
+    let Some(&(x0, y0, mut stable)) = pts.first() else {
+        return Ok(());
+    };
+    let mut run = vec![(x0, y0)];
+    for w in pts.windows(2) {
+        let (pa, pc) = ((w[0].0, w[0].1), (w[1].0, w[1].1));
+        if w[1].2 == stable {
+            run.push(pc);
+        } else {
+            let mid = (0.5 * (pa.0 + pc.0), 0.5 * (pa.1 + pc.1));
+            run.push(mid);
+            segment(chart, &run, stable, colour)?;
+            run = vec![mid, pc];
+            stable = w[1].2;
+        }
+    }
+    segment(chart, &run, stable, colour)
+}
+
 fn segment(
     chart: &mut Chart<'_, '_>,
     pts: &[(f64, f64)],
@@ -400,12 +422,6 @@ fn segment(
     if stable {
         thick_line(chart, pts, colour, 3)
     } else {
-        chart.draw_series(DashedLineSeries::new(
-            pts.iter().copied(),
-            7,
-            5,
-            colour.stroke_width(1),
-        ))?;
-        Ok(())
+        dashed_line(chart, pts, colour, (7, 5))
     }
 }

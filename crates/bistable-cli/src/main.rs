@@ -16,6 +16,7 @@
 //! - `attractor.rs`: per-cycle maxima, impact phases and section points of a steady state;
 //! - `branches.rs`: periodic-orbit branches along a parameter grid (shooting, continuation);
 //! - `bifurcation.rs`: `bistable bifurcation`;
+//! - `arclength.rs`: pseudo-arclength continuation of orbits in Ω (through folds);
 //! - `orbit.rs`: `bistable orbit`;
 //! - `thresholds.rs`: `bistable thresholds`;
 //! - `energy_map.rs`: `bistable energy-map`;
@@ -25,6 +26,7 @@
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
 //! Result<(), CliError>`, then add a variant to [`Command`] and a line to [`main`].
 
+mod arclength;
 mod attractor;
 mod bifurcation;
 mod branches;

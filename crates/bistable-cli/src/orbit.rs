@@ -9,11 +9,12 @@ use serde::Serialize;
 
 use bistable_core::{shoot, Event, ShootOptions};
 
+use crate::arclength::{self, ArcOptions, ArcPoint};
 use crate::attractor::{detect_period, steady_cycles};
 use crate::branches::{self, Branches, Seed};
 use crate::common::{Model, ModelArgs};
 use crate::error::CliError;
-use crate::output::{print_json, print_text, CsvFile};
+use crate::output::{print_json, print_text, CsvFile, Field};
 use crate::parallel;
 use crate::plot::{self, header, Area, DrawResult, Mark};
 use crate::ranges::{Pair, Range};
@@ -37,9 +38,12 @@ With --continue-omega A:B:N: natural continuation in Ω for each --velocity
 simulation (--settle shaker periods) seeds the orbit of period --period (or, if
 the attractor has a multiple of that period, the orbit it doubled from); each
 orbit found is continued from point to point in both directions, so unstable
-parts are followed past period doublings. Folds end a branch (natural
-continuation cannot turn around). --plot draws the largest displacement of
-the orbits against Ω: stable thick and solid, unstable thin and dashed.";
+parts are followed past period doublings. Folds end such a branch (natural
+continuation cannot turn around); with --arclength the branches are followed
+through folds by pseudo-arclength continuation (unknowns x, x', Ω; tangent from
+[M − I | ∂P/∂Ω]), which shows the unstable middle branch of a hysteresis loop.
+--plot draws the largest displacement of the orbits against Ω: stable thick and
+solid, unstable thin and dashed.";
 
 /// Shown after the options by `bistable orbit --help`.
 pub const AFTER_HELP: &str = "\
@@ -51,7 +55,11 @@ det_monodromy, det_identity, det_relative_error (null when the orbit sticks),
 guess, guess_source, distance_to_guess.
 
 CSV (--out, with --continue-omega): one row per orbit, as the _orbits.csv of
-'bistable bifurcation'.
+'bistable bifurcation'; with --arclength one row per point of each trace:
+  velocity,trace,index,omega,x0,v0,max_x,stable,multiplier_1_re,
+  multiplier_1_im,multiplier_2_re,multiplier_2_im,abs_multiplier,impacts
+The JSON summary gives per V the orbits, the stable ones, the Ω covered, and
+with --arclength the traces and their folds (turning points in Ω).
 
 Exit codes: 0 success; 2 invalid options; 1 Newton failed, a simulation failed
 or a file could not be written.
@@ -61,7 +69,7 @@ Examples:
   bistable orbit --omega 2.2 --velocity 0.07 --period 2 --json
   bistable orbit --omega 2.2 --velocity 0.07 --guess 0.05,0.1
   bistable orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 \\
-      --plot out/orbits.png --out out/orbits.csv";
+      --arclength --plot out/orbits.png --out out/orbits.csv";
 
 /// Options of `bistable orbit`.
 #[derive(Debug, Clone, Args)]
@@ -129,6 +137,12 @@ pub struct OrbitArgs {
         help_heading = "Continuation"
     )]
     pub out: Option<PathBuf>,
+
+    /// Follow the branches through folds by pseudo-arclength continuation (unknowns x, x', Ω;
+    /// ∂P/∂Ω by central differences) instead of natural continuation; the step along the
+    /// branch is at most the spacing of --continue-omega.
+    #[arg(long, requires = "continue_omega", help_heading = "Continuation")]
+    pub arclength: bool,
 
     /// Worker threads for --continue-omega [default: all cores].
     #[arg(long, value_name = "N", help_heading = "Continuation")]
@@ -343,22 +357,38 @@ struct BranchSummary {
     stable: usize,
     omega_min: Option<f64>,
     omega_max: Option<f64>,
+    /// With --arclength: separate traces, and turning points in Ω (folds) along them.
+    traces: Option<usize>,
+    folds: Option<usize>,
 }
 
 #[derive(Debug, Serialize)]
 struct ContinuationSummary {
     period: u32,
+    method: &'static str,
     omega_range: String,
     branches: Vec<BranchSummary>,
     files: Vec<PathBuf>,
 }
+
+/// The continued orbits for one V.
+enum Curves {
+    /// Natural continuation on the grid.
+    Natural(Branches),
+    /// Pseudo-arclength traces.
+    Arc(Vec<Vec<ArcPoint>>),
+}
+
+/// Header of the CSV of `--arclength` traces.
+const ARC_HEADER: &str = "velocity,trace,index,omega,x0,v0,max_x,stable,multiplier_1_re,\
+multiplier_1_im,multiplier_2_re,multiplier_2_im,abs_multiplier,impacts";
 
 fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
     let range = range.check("--continue-omega", |w| w > 0.0, "Ω must be > 0")?;
     let threads = parallel::threads(args.threads, "--threads")?;
     let omegas = range.values();
     let p = args.period;
-    let mut all: Vec<(f64, Branches)> = Vec::new();
+    let mut all: Vec<(f64, Curves)> = Vec::new();
     for &v in &args.velocity {
         let models = omegas
             .iter()
@@ -378,70 +408,197 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
                 Ok(())
             },
         )?;
-        let b = branches::build(&models, &[p], &seeds, threads)?;
-        all.extend(b.into_iter().map(|b| (v, b)));
+        let curves = if args.arclength {
+            Curves::Arc(arc_traces(&models, &seeds, range, p, threads)?)
+        } else {
+            let mut b = branches::build(&models, &[p], &seeds, threads)?;
+            Curves::Natural(b.remove(0))
+        };
+        all.push((v, curves));
     }
     let mut files = Vec::new();
     if let Some(path) = &args.out {
-        let mut csv = CsvFile::create(path, branches::CSV_HEADER)?;
-        for (_, b) in &all {
-            branches::write_csv(&mut csv, std::slice::from_ref(b))?;
-        }
-        files.push(csv.finish()?);
+        files.push(write_continuation_csv(path, &all)?);
     }
     if let Some(path) = &args.plot {
         let model = Model::new(&args.model, range.start, args.velocity[0])?;
         plot::png(path, (1400, 950), |root| {
-            draw(root, &model, p, &omegas, &all)
+            draw(root, &model, p, args.arclength, &omegas, &all)
         })?;
         files.push(path.clone());
     }
     let summary = ContinuationSummary {
         period: p,
+        method: if args.arclength {
+            "pseudo-arclength"
+        } else {
+            "natural"
+        },
         omega_range: range.to_string(),
         branches: all
             .iter()
-            .map(|(v, b)| {
-                let covered: Vec<f64> = b
-                    .slots
-                    .iter()
-                    .zip(&omegas)
-                    .filter(|(s, _)| !s.is_empty())
-                    .map(|(_, &w)| w)
-                    .collect();
-                BranchSummary {
-                    velocity: *v,
-                    orbits: b.len(),
-                    stable: b.slots.iter().flatten().filter(|o| o.orbit.stable).count(),
-                    omega_min: covered.first().copied(),
-                    omega_max: covered.last().copied(),
-                }
-            })
+            .map(|(v, c)| branch_summary(*v, c, &omegas))
             .collect(),
         files,
     };
     if args.model.json {
-        print_json(&summary)
-    } else {
-        let mut text = format!(
-            "period-{p} orbits continued over Ω = {}:\n",
-            summary.omega_range
-        );
-        for b in &summary.branches {
-            text.push_str(&format!(
-                "  V = {}: {} orbits ({} stable), Ω from {} to {}\n",
-                b.velocity,
-                b.orbits,
-                b.stable,
-                b.omega_min.map_or("-".into(), |w| format!("{w:.4}")),
-                b.omega_max.map_or("-".into(), |w| format!("{w:.4}"))
-            ));
-        }
-        for f in &summary.files {
-            text.push_str(&format!("wrote {}\n", f.display()));
-        }
-        print_text(&text)
+        return print_json(&summary);
     }
+    let mut text = format!(
+        "period-{p} orbits continued over Ω = {} ({} continuation):\n",
+        summary.omega_range, summary.method
+    );
+    for b in &summary.branches {
+        text.push_str(&format!(
+            "  V = {}: {} orbits ({} stable), Ω from {} to {}{}\n",
+            b.velocity,
+            b.orbits,
+            b.stable,
+            b.omega_min.map_or("-".into(), |w| format!("{w:.4}")),
+            b.omega_max.map_or("-".into(), |w| format!("{w:.4}")),
+            match (b.traces, b.folds) {
+                (Some(t), Some(f)) => format!(", {t} traces, {f} folds"),
+                _ => String::new(),
+            }
+        ));
+    }
+    for f in &summary.files {
+        text.push_str(&format!("wrote {}\n", f.display()));
+    }
+    print_text(&text)
+}
+
+/// Pseudo-arclength traces through every seeded orbit not already on a trace, in both
+/// directions, joined into one polyline each.
+fn arc_traces(
+    models: &[Model],
+    seeds: &[Seed],
+    range: Range,
+    p: u32,
+    threads: usize,
+) -> Result<Vec<Vec<ArcPoint>>, CliError> {
+    let mut found = branches::solve_seeds(models, seeds, threads)?;
+    found.sort_by_key(|f| f.0.point);
+    let (lo, hi) = range.bounds();
+    let step = if range.n > 1 {
+        range.step().abs()
+    } else {
+        0.01
+    };
+    let o = ArcOptions {
+        period: p,
+        omega_bounds: (lo - 0.5 * step, hi + 0.5 * step),
+        ds_max: step,
+        max_points: 40 * range.n.max(50),
+    };
+    let mut traces: Vec<Vec<ArcPoint>> = Vec::new();
+    for (seed, orbit) in &found {
+        let w = models[seed.point].omega();
+        let (x, v) = orbit.point();
+        if traces.iter().any(|t| arclength::covers(t, w, x, v, 5e-3)) {
+            continue;
+        }
+        let model = &models[seed.point];
+        let start = (w, x, v);
+        let (mut back, fwd) = std::thread::scope(|s| {
+            let b = s.spawn(|| arclength::trace(model, start, -1.0, o));
+            let f = arclength::trace(model, start, 1.0, o);
+            (b.join().expect("trace thread"), f)
+        });
+        let mut back = std::mem::take(back.as_mut().map_err(|e| CliError::Failed(e.to_string()))?);
+        back.reverse();
+        back.extend(fwd?.into_iter().skip(1));
+        if back.len() > 1 {
+            traces.push(back);
+        }
+    }
+    Ok(traces)
+}
+
+/// Number of turning points of Ω along a trace.
+fn folds(t: &[ArcPoint]) -> usize {
+    t.windows(3)
+        .filter(|w| (w[1].omega - w[0].omega) * (w[2].omega - w[1].omega) < 0.0)
+        .count()
+}
+
+fn branch_summary(v: f64, c: &Curves, omegas: &[f64]) -> BranchSummary {
+    match c {
+        Curves::Natural(b) => {
+            let covered: Vec<f64> = b
+                .slots
+                .iter()
+                .zip(omegas)
+                .filter(|(s, _)| !s.is_empty())
+                .map(|(_, &w)| w)
+                .collect();
+            BranchSummary {
+                velocity: v,
+                orbits: b.len(),
+                stable: b.slots.iter().flatten().filter(|o| o.orbit.stable).count(),
+                omega_min: covered.first().copied(),
+                omega_max: covered.last().copied(),
+                traces: None,
+                folds: None,
+            }
+        }
+        Curves::Arc(traces) => {
+            let pts = || traces.iter().flatten();
+            BranchSummary {
+                velocity: v,
+                orbits: pts().count(),
+                stable: pts().filter(|p| p.stable).count(),
+                omega_min: pts().map(|p| p.omega).reduce(f64::min),
+                omega_max: pts().map(|p| p.omega).reduce(f64::max),
+                traces: Some(traces.len()),
+                folds: Some(traces.iter().map(|t| folds(t)).sum()),
+            }
+        }
+    }
+}
+
+fn write_continuation_csv(
+    path: &std::path::Path,
+    all: &[(f64, Curves)],
+) -> Result<PathBuf, CliError> {
+    let arc = all.iter().any(|(_, c)| matches!(c, Curves::Arc(_)));
+    let mut csv = CsvFile::create(
+        path,
+        if arc {
+            ARC_HEADER
+        } else {
+            branches::CSV_HEADER
+        },
+    )?;
+    for (v, c) in all {
+        match c {
+            Curves::Natural(b) => branches::write_csv(&mut csv, std::slice::from_ref(b))?,
+            Curves::Arc(traces) => {
+                for (k, t) in traces.iter().enumerate() {
+                    for (i, a) in t.iter().enumerate() {
+                        let m = a.multipliers;
+                        csv.row(&[
+                            Field::F(*v),
+                            Field::I(k as u64),
+                            Field::I(i as u64),
+                            Field::F(a.omega),
+                            Field::F(a.x0),
+                            Field::F(a.v0),
+                            Field::F(a.max_x),
+                            Field::S(if a.stable { "true" } else { "false" }),
+                            Field::F(m[0].0),
+                            Field::F(m[0].1),
+                            Field::F(m[1].0),
+                            Field::F(m[1].1),
+                            Field::F(m[0].0.hypot(m[0].1)),
+                            Field::I(a.impacts),
+                        ])?;
+                    }
+                }
+            }
+        }
+    }
+    csv.finish()
 }
 
 /// Distinct colours for the velocity series.
@@ -460,8 +617,9 @@ fn draw(
     root: &Area<'_>,
     model: &Model,
     period: u32,
+    arc: bool,
     omegas: &[f64],
-    all: &[(f64, Branches)],
+    all: &[(f64, Curves)],
 ) -> DrawResult {
     let mut legend: Vec<(Mark, String)> = all
         .iter()
@@ -477,18 +635,34 @@ fn draw(
             model.params.zeta(),
             model.restitution()
         ),
-        "largest displacement of each orbit found by shooting, continued in Ω from simulated \
-         attractors",
+        &format!(
+            "largest displacement of each orbit found by shooting from simulated attractors, {}",
+            if arc {
+                "followed through folds by pseudo-arclength continuation"
+            } else {
+                "continued in Ω point by point (natural continuation)"
+            }
+        ),
         &legend,
     )?;
     let (x0, x1) = plot::range(omegas.iter().copied(), 0.01);
-    let (y0, y1) = plot::range(
-        all.iter()
-            .flat_map(|(_, b)| b.slots.iter().flatten())
-            .flat_map(|o| o.cycle_max.iter().copied())
-            .chain([0.0]),
-        0.05,
-    );
+    let ys = all.iter().flat_map(|(_, c)| -> Vec<f64> {
+        match c {
+            Curves::Natural(b) => b
+                .slots
+                .iter()
+                .flatten()
+                .flat_map(|o| o.cycle_max.iter().copied())
+                .collect(),
+            Curves::Arc(t) => t
+                .iter()
+                .flatten()
+                .filter(|p| p.omega >= x0 && p.omega <= x1)
+                .map(|p| p.max_x)
+                .collect(),
+        }
+    });
+    let (y0, y1) = plot::range(ys.chain([0.0]), 0.05);
     let mut chart = plot::chart(
         &area,
         (x0, x1),
@@ -500,8 +674,18 @@ fn draw(
     if y0 < 0.5 && y1 > 0.5 {
         plot::hline(&mut chart, 0.5, RGBColor(90, 90, 90))?;
     }
-    for (k, (_, b)) in all.iter().enumerate() {
-        branches::draw(&mut chart, b, omegas, SERIES[k % SERIES.len()])?;
+    for (k, (_, c)) in all.iter().enumerate() {
+        let colour = SERIES[k % SERIES.len()];
+        match c {
+            Curves::Natural(b) => branches::draw(&mut chart, b, omegas, colour)?,
+            Curves::Arc(traces) => {
+                for t in traces {
+                    let pts: Vec<(f64, f64, bool)> =
+                        t.iter().map(|p| (p.omega, p.max_x, p.stable)).collect();
+                    branches::draw_curve(&mut chart, &pts, colour)?;
+                }
+            }
+        }
     }
     Ok(())
 }

@@ -452,6 +452,29 @@ pub(crate) fn thick_line(
     Ok(())
 }
 
+/// A thin dashed polyline of `on`/`off` pixels whose pattern runs on along the whole line (a
+/// dense curve of short segments stays dashed).
+pub(crate) fn dashed_line(
+    chart: &mut Chart<'_, '_>,
+    pts: &[(f64, f64)],
+    color: RGBColor,
+    (on, off): (i32, i32),
+) -> DrawResult {
+    let area = chart.plotting_area().strip_coord_spec();
+    let base = chart.plotting_area().get_base_pixel();
+    let px: Vec<(i32, i32)> = pts
+        .iter()
+        .map(|p| {
+            let (x, y) = chart.backend_coord(p);
+            (x - base.0, y - base.1)
+        })
+        .collect();
+    for seg in dashes(&px, on, off) {
+        area.draw(&PathElement::new(seg.to_vec(), color.stroke_width(1)))?;
+    }
+    Ok(())
+}
+
 pub(crate) fn hline(chart: &mut Chart<'_, '_>, y: f64, color: RGBColor) -> DrawResult {
     let xr = chart.x_range();
     chart.draw_series(DashedLineSeries::new(

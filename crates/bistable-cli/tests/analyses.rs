@@ -293,6 +293,54 @@ fn orbit_continuation_writes_branches_and_plot() {
     assert!(stable_at(2.4).contains(&false));
 }
 
+#[test]
+fn arclength_continuation_turns_at_folds() {
+    let dir = scratch("arclength");
+    let csv = dir.join("arc.csv");
+    let c = json(&[
+        "orbit",
+        "--continue-omega",
+        "0.8:2.0:61",
+        "--velocity",
+        "0.03",
+        "--settle",
+        "500",
+        "--arclength",
+        "--out",
+        s(&csv),
+        "--json",
+    ]);
+    assert_eq!(c["method"], "pseudo-arclength");
+    // The resonance curve bends over: a lower fold near Ω = 1.57 and an upper one near 0.93.
+    assert!(c["branches"][0]["folds"].as_u64().unwrap() >= 2, "{c}");
+    let rows = csv_rows(&csv);
+    let f = |r: &std::collections::HashMap<String, String>, k: &str| r[k].parse::<f64>().unwrap();
+    // At Ω ≈ 1.2 three period-1 orbits coexist: small and large stable ones, and between them
+    // a saddle (real multiplier > 1) that natural continuation cannot reach.
+    let near: Vec<_> = rows
+        .iter()
+        .filter(|r| (f(r, "omega") - 1.2).abs() < 0.03)
+        .collect();
+    assert!(near
+        .iter()
+        .any(|r| r["stable"] == "true" && f(r, "max_x") < 0.1));
+    assert!(near
+        .iter()
+        .any(|r| r["stable"] == "true" && f(r, "max_x") > 0.2));
+    assert!(near.iter().any(|r| r["stable"] == "false"
+        && f(r, "multiplier_1_re") > 1.0
+        && f(r, "multiplier_1_im") == 0.0
+        && f(r, "max_x") > 0.1
+        && f(r, "max_x") < 0.3));
+    // At a fold a real multiplier passes through +1.
+    let closest = rows
+        .iter()
+        .filter(|r| f(r, "multiplier_1_im") == 0.0)
+        .map(|r| (f(r, "multiplier_1_re") - 1.0).abs())
+        .fold(f64::INFINITY, f64::min);
+    assert!(closest < 0.05, "{closest}");
+}
+
 fn map_args<'a>(csv: &'a str, png: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
     let mut a = vec![
         "map",

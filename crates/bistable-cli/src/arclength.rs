@@ -1,0 +1,300 @@
+//! Pseudo-arclength continuation of periodic orbits in Ω: follows a branch of fixed points of
+//! the p-period stroboscopic map through folds, where natural continuation (one Newton solve
+//! per Ω) must stop.
+//!
+//! Unknowns `u = (x, x', Ω)`; equations `P(x, x'; Ω) − (x, x') = 0` and the arclength condition
+//! `t·(u − u_pred) = 0`, with `t` the unit tangent, the null vector of `[M − I | ∂P/∂Ω]`. `M`
+//! comes from the core's variational equations (saltation matrices at impacts); `∂P/∂Ω` is a
+//! central difference (the map runs from plate phase 0 to plate phase 0, so changing Ω also
+//! changes its duration `2πp/Ω`).
+
+use bistable_core::shooting::eigenvalues;
+use bistable_core::{Event, SimError, Simulator, Sinusoid};
+
+use crate::attractor::record_cycles;
+use crate::common::Model;
+use crate::error::CliError;
+
+/// One orbit on a traced branch.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct ArcPoint {
+    /// `Ω`.
+    pub omega: f64,
+    /// Fixed point at plate phase 0.
+    pub x0: f64,
+    /// Its velocity.
+    pub v0: f64,
+    /// Floquet multipliers `(re, im)`, largest modulus first.
+    pub multipliers: [(f64, f64); 2],
+    /// All multipliers inside the unit circle.
+    pub stable: bool,
+    /// Impacts per orbit.
+    pub impacts: u64,
+    /// Largest displacement on the orbit.
+    pub max_x: f64,
+}
+
+/// Settings of a trace.
+#[derive(Debug, Clone, Copy)]
+pub struct ArcOptions {
+    /// Period in shaker periods.
+    pub period: u32,
+    /// Stop once Ω leaves this interval.
+    pub omega_bounds: (f64, f64),
+    /// Largest step along the branch (in the `(x, x', Ω)` norm).
+    pub ds_max: f64,
+    /// Most points on one trace.
+    pub max_points: usize,
+}
+
+/// Residual, Jacobian `[M − I | ∂P/∂Ω]`, monodromy and impacts at `u`.
+struct Eval {
+    g: [f64; 2],
+    jac: [[f64; 3]; 2],
+    m: [[f64; 2]; 2],
+    impacts: u64,
+}
+
+/// `(P(y), M, impacts)`.
+type MapResult = ([f64; 2], [[f64; 2]; 2], u64);
+
+/// `(P(y), M, impacts)` of the `p`-period map at `Ω`.
+fn period_map(
+    model: &Model,
+    omega: f64,
+    p: u32,
+    y: [f64; 2],
+    variational: bool,
+) -> Result<MapResult, SimError> {
+    let plate = Sinusoid::new(omega, model.velocity())?;
+    let mut sim = Simulator::with_state(
+        model.params,
+        plate.into(),
+        model.opts,
+        0.0,
+        y[0].max(0.0),
+        y[1],
+    )?;
+    if variational {
+        sim.enable_variational();
+    }
+    sim.advance_instant(plate.section(u64::from(p)), &mut |_: &Event| {})?;
+    let st = sim.state();
+    let m = sim.variational().unwrap_or([[0.0; 2]; 2]);
+    Ok(([st.x, st.v], m, sim.stats().impacts))
+}
+
+fn evaluate(model: &Model, p: u32, u: [f64; 3]) -> Result<Eval, SimError> {
+    let y = [u[0], u[1]];
+    let (py, m, impacts) = period_map(model, u[2], p, y, true)?;
+    let d = 1e-6 * u[2].abs().max(1.0);
+    let (plus, _, _) = period_map(model, u[2] + d, p, y, false)?;
+    let (minus, _, _) = period_map(model, u[2] - d, p, y, false)?;
+    let dp = [
+        (plus[0] - minus[0]) / (2.0 * d),
+        (plus[1] - minus[1]) / (2.0 * d),
+    ];
+    Ok(Eval {
+        g: [py[0] - y[0], py[1] - y[1]],
+        jac: [
+            [m[0][0] - 1.0, m[0][1], dp[0]],
+            [m[1][0], m[1][1] - 1.0, dp[1]],
+        ],
+        m,
+        impacts,
+    })
+}
+
+fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
+fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
+}
+
+fn norm(a: [f64; 3]) -> f64 {
+    dot(a, a).sqrt()
+}
+
+/// Unit null vector of the 2×3 Jacobian, oriented along `along` (or with the sign of `dir` in
+/// Ω when there is no previous tangent).
+fn tangent(jac: [[f64; 3]; 2], along: Option<[f64; 3]>, dir: f64) -> Option<[f64; 3]> {
+    let t = cross(jac[0], jac[1]);
+    let n = norm(t);
+    if !(n.is_finite() && n > 0.0) {
+        return None;
+    }
+    let mut t = t.map(|c| c / n);
+    let flip = match along {
+        Some(prev) => dot(t, prev) < 0.0,
+        None => t[2] * dir < 0.0,
+    };
+    if flip {
+        t = t.map(|c| -c);
+    }
+    Some(t)
+}
+
+/// Solves the 3×3 system `a·x = b` by Gaussian elimination with partial pivoting.
+fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+    for col in 0..3 {
+        let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[piv][col] == 0.0 || !a[piv][col].is_finite() {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        let pivot_row = a[col];
+        for row in col + 1..3 {
+            let f = a[row][col] / pivot_row[col];
+            for (k, entry) in a[row].iter_mut().enumerate().skip(col) {
+                *entry -= f * pivot_row[k];
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    let mut x = [0.0; 3];
+    for row in (0..3).rev() {
+        let s: f64 = (row + 1..3).map(|k| a[row][k] * x[k]).sum();
+        x[row] = (b[row] - s) / a[row][row];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+/// Newton on the augmented system from `pred`, with the arclength condition along `t`.
+/// Returns the converged point and its evaluation.
+fn correct(model: &Model, p: u32, pred: [f64; 3], t: [f64; 3]) -> Option<([f64; 3], Eval, u32)> {
+    let mut u = pred;
+    for it in 0..12 {
+        let e = evaluate(model, p, u).ok()?;
+        let scale = u[0].abs().max(u[1].abs()).max(1.0);
+        let res = e.g[0].abs().max(e.g[1].abs());
+        if res <= 1e-11 * scale {
+            return Some((u, e, it));
+        }
+        let arc = dot(t, [u[0] - pred[0], u[1] - pred[1], u[2] - pred[2]]);
+        let d = solve3([e.jac[0], e.jac[1], t], [-e.g[0], -e.g[1], -arc])?;
+        u = [u[0] + d[0], u[1] + d[1], u[2] + d[2]];
+        if u[2] <= 0.0 || u.iter().any(|c| !c.is_finite()) {
+            return None;
+        }
+    }
+    None
+}
+
+fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, CliError> {
+    let multipliers = eigenvalues(e.m);
+    let here = model.at(u[2], model.velocity())?;
+    let mut sim = Simulator::with_state(
+        here.params,
+        here.shaker.into(),
+        here.opts,
+        0.0,
+        u[0].max(0.0),
+        u[1],
+    )?;
+    let c = record_cycles(&mut sim, here.shaker, 0, p, 128)?;
+    Ok(ArcPoint {
+        omega: u[2],
+        x0: u[0],
+        v0: u[1],
+        multipliers,
+        stable: multipliers[0].0.hypot(multipliers[0].1) < 1.0,
+        impacts: e.impacts,
+        max_x: c.max_x.iter().copied().fold(f64::MIN, f64::max),
+    })
+}
+
+/// Traces the branch through the orbit `(x0, v0)` at `Ω0` (a fixed point of the map) in the
+/// direction of increasing (`dir > 0`) or decreasing Ω, until Ω leaves the bounds, the step
+/// size collapses (a non-smooth point such as grazing, or a lost orbit) or `max_points`.
+pub fn trace(
+    model: &Model,
+    start: (f64, f64, f64),
+    dir: f64,
+    o: ArcOptions,
+) -> Result<Vec<ArcPoint>, CliError> {
+    let p = o.period;
+    let mut u = [start.1, start.2, start.0];
+    let Ok(e) = evaluate(model, p, u) else {
+        return Ok(Vec::new());
+    };
+    let Some(mut t) = tangent(e.jac, None, dir) else {
+        return Ok(Vec::new());
+    };
+    let mut out = vec![point(model, p, u, &e)?];
+    let ds_min = 1e-5 * o.ds_max;
+    let mut ds = 0.25 * o.ds_max;
+    while out.len() < o.max_points && ds >= ds_min {
+        let pred = [u[0] + ds * t[0], u[1] + ds * t[1], u[2] + ds * t[2]];
+        let next = correct(model, p, pred, t).and_then(|(un, e, it)| {
+            let step = norm([un[0] - u[0], un[1] - u[1], un[2] - u[2]]);
+            let tn = tangent(e.jac, Some(t), dir)?;
+            // A corrector that lands far away, or a tangent that turns back, jumped branches.
+            (step <= 2.0 * ds && dot(tn, t) > 0.5).then_some((un, e, it, tn))
+        });
+        match next {
+            Some((un, e, it, tn)) => {
+                u = un;
+                t = tn;
+                out.push(point(model, p, u, &e)?);
+                if u[2] < o.omega_bounds.0 || u[2] > o.omega_bounds.1 {
+                    break;
+                }
+                if it <= 3 {
+                    ds = (1.5 * ds).min(o.ds_max);
+                }
+            }
+            None => ds *= 0.5,
+        }
+    }
+    Ok(out)
+}
+
+/// Whether the orbit `(x, x')` at `Ω` lies on the traced polyline (within `tol`).
+pub fn covers(trace: &[ArcPoint], omega: f64, x: f64, v: f64, tol: f64) -> bool {
+    trace.windows(2).any(|w| {
+        let (a, b) = (w[0], w[1]);
+        let (lo, hi) = (a.omega.min(b.omega), a.omega.max(b.omega));
+        if omega < lo || omega > hi {
+            return false;
+        }
+        let s = if hi > lo {
+            (omega - a.omega) / (b.omega - a.omega)
+        } else {
+            0.5
+        };
+        let xi = a.x0 + s * (b.x0 - a.x0);
+        let vi = a.v0 + s * (b.v0 - a.v0);
+        (xi - x).abs().max((vi - v).abs()) <= tol
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn linear_algebra() {
+        let x = solve3(
+            [[0.0, 2.0, 1.0], [1.0, 0.0, 0.0], [3.0, 1.0, 4.0]],
+            [5.0, 1.0, 16.0],
+        )
+        .unwrap();
+        // x = (1, 1, 3).
+        assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14);
+        assert!((x[2] - 3.0).abs() < 1e-14);
+        assert!(solve3(
+            [[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 0.0, 1.0]],
+            [1.0; 3]
+        )
+        .is_none());
+        let t = tangent([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, -1.0).unwrap();
+        assert_eq!(t, [0.0, 0.0, -1.0]);
+    }
+}
