@@ -304,12 +304,11 @@ pub fn write_csv(csv: &mut CsvFile, branches: &[Branches]) -> Result<(), CliErro
                 .map(|&x| crate::output::num(x))
                 .collect::<Vec<_>>()
                 .join(";");
-            let flag = |v: bool| Field::S(if v { "true" } else { "false" });
             csv.row(&[
                 Field::F(p.omega),
                 Field::F(p.velocity),
                 Field::I(u64::from(p.periods)),
-                flag(p.stable),
+                Field::flag(p.stable),
                 Field::F(p.x0),
                 Field::F(p.v0),
                 Field::F(o.cycle_max.last().copied().unwrap_or(p.max_x)),
@@ -321,7 +320,7 @@ pub fn write_csv(csv: &mut CsvFile, branches: &[Branches]) -> Result<(), CliErro
                 Field::F(o.abs_multiplier()),
                 Field::I(p.impacts),
                 Field::I(p.snap_throughs),
-                flag(p.sticks),
+                Field::flag(p.sticks),
             ])?;
         }
     }

@@ -214,7 +214,6 @@ impl Record {
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
     pub fn fields(&self) -> [Field<'_>; 16] {
         let opt_i = |v: Option<u64>| v.map_or(Field::Empty, Field::I);
-        let b = |v: bool| Field::S(if v { "true" } else { "false" });
         [
             Field::F(self.omega),
             Field::F(self.velocity),
@@ -222,15 +221,15 @@ impl Record {
             Field::F(self.restitution),
             Field::S(&self.class),
             opt_i(self.period.map(u64::from)),
-            b(self.chaotic),
+            Field::flag(self.chaotic),
             self.lyapunov.map_or(Field::Empty, Field::F),
             Field::I(self.snap_throughs),
             Field::I(u64::from(self.final_well)),
-            b(self.at_rest_in_second_well),
+            Field::flag(self.at_rest_in_second_well),
             opt_i(self.impacts_per_period),
-            b(self.sticking),
+            Field::flag(self.sticking),
             Field::F(self.periods_simulated),
-            b(self.stopped_early),
+            Field::flag(self.stopped_early),
             Field::F(self.wall_time_s),
         ]
     }

@@ -585,7 +585,7 @@ fn write_continuation_csv(
                             Field::F(a.x0),
                             Field::F(a.v0),
                             Field::F(a.max_x),
-                            Field::S(if a.stable { "true" } else { "false" }),
+                            Field::flag(a.stable),
                             Field::F(m[0].0),
                             Field::F(m[0].1),
                             Field::F(m[1].0),

@@ -42,6 +42,13 @@ pub enum Field<'a> {
     Empty,
 }
 
+impl Field<'_> {
+    /// `true` or `false`.
+    pub fn flag(v: bool) -> Field<'static> {
+        Field::S(if v { "true" } else { "false" })
+    }
+}
+
 /// Appends `fields` to `line`, comma separated.
 pub fn push_fields(line: &mut String, fields: &[Field<'_>]) {
     for (i, f) in fields.iter().enumerate() {
