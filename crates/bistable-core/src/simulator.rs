@@ -962,6 +962,17 @@ impl Simulator {
 /// (`on_barrier`: the step starts on the barrier, so that root is divided out).
 fn barrier_root(well: Well, on_barrier: bool, x: &[f64], h: f64) -> Option<f64> {
     let sign = if well == Well::Two { 1.0 } else { -1.0 };
+    // Most steps stay far from the barrier: |x(s) − x(0)| ≤ Σ_{k≥1} |x_k| h^k settles them.
+    if !on_barrier {
+        let (mut reach, mut hk) = (0.0, 1.0);
+        for &xk in &x[1..] {
+            hk *= h;
+            reach += xk.abs() * hk;
+        }
+        if sign * (x[0] - BARRIER) > reach {
+            return None;
+        }
+    }
     let mut g = [0.0; BUF];
     for (gk, &xk) in g.iter_mut().zip(x) {
         *gk = sign * xk;

@@ -9,10 +9,12 @@ pub const MAX_ORDER: usize = 40;
 /// Length of the coefficient buffers (orders `0..=MAX_ORDER + 2`).
 pub(crate) const BUF: usize = MAX_ORDER + 3;
 
-/// Taylor order for a local tolerance (Jorba & Zou: `p ≈ −ln(tol)/2 + 1`), clamped to `[8, 40]`.
+/// Taylor order for a local tolerance: `p = ⌈−ln(tol)/2⌉ + 4` (Jorba & Zou's `−ln(tol)/2`, plus a
+/// margin that lengthens the steps by more than it costs), rounded up to even (the products run
+/// in chunks of four), clamped to `[8, 40]`. Default tolerance `1e-16` → 24, `1e-15` → 22.
 pub fn order_for(tol: f64) -> usize {
-    let p = (-tol.ln() / 2.0).ceil() as usize + 2;
-    p.clamp(8, MAX_ORDER)
+    let p = (-tol.ln() / 2.0).ceil() as usize + 4;
+    (p + p % 2).clamp(8, MAX_ORDER)
 }
 
 /// Coefficients of `x` and of the gap `u = x − z` over one free-flight step, up to `order + 1`.
@@ -23,6 +25,8 @@ pub(crate) struct FlightSeries {
     pub u: [f64; BUF],
     /// Coefficients of `x²` (orders `0..order`), for the variational equations.
     pub sq: [f64; PAD],
+    /// Scratch: `x` in reverse order, `xr[R − j] = x_j`, zero past `R`.
+    xr: [f64; PAD],
 }
 
 impl Default for FlightSeries {
@@ -31,6 +35,7 @@ impl Default for FlightSeries {
             x: [0.0; PAD],
             u: [0.0; BUF],
             sq: [0.0; PAD],
+            xr: [0.0; PAD],
         }
     }
 }
@@ -45,19 +50,18 @@ pub(crate) fn flight(
     order: usize,
     out: &mut FlightSeries,
 ) {
-    let FlightSeries { x: xp, u, sq } = out;
-    // x in reverse order (xr[R − j] = x_j) and zero beyond x_0, so that each Cauchy product is a
-    // dot product over a length rounded up to a multiple of 4 (xp and sq are zero past what is
-    // computed).
-    let mut xr = [0.0; PAD];
-    sq.iter_mut().for_each(|c| *c = 0.0);
+    let FlightSeries { x: xp, u, sq, xr } = out;
+    // With x reversed in xr (zero past x_0), each Cauchy product is a dot product over a length
+    // rounded up to a multiple of 4; the entries read past the last computed coefficient of xp
+    // and sq must be zero. Only entries written here are read from xr below R.
+    sq[..order + 4].iter_mut().for_each(|c| *c = 0.0);
     xp[0] = u0 + z[0];
     xp[1] = w0 + z[1];
     u[0] = u0;
     u[1] = w0;
     xr[R] = xp[0];
     xr[R - 1] = xp[1];
-    xp[order + 2..].iter_mut().for_each(|c| *c = 0.0);
+    xp[order + 2..order + 5].iter_mut().for_each(|c| *c = 0.0);
     let three_minus_2x0 = 3.0 - 2.0 * xp[0];
     for k in 0..order {
         let len = (k + 4) & !3;
@@ -67,7 +71,12 @@ pub(crate) fn flight(
         // never wait for a value stored just before).
         let lin = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k];
         let c_old = dot4(&sq[..len], rev);
-        let s = dot4(&xp[..len], rev);
+        // Square by symmetry: twice the pairs j < k − j, plus the middle term.
+        let half = (k + 1) / 2;
+        let mut s = 2.0 * dot_exact(&xp[..half], &rev[..half]);
+        if k % 2 == 0 {
+            s += xp[k / 2] * xp[k / 2];
+        }
         sq[k] = s;
         // rhs = lin + 3s − 2(c_old + s·x_0)
         let rhs = (lin - 2.0 * c_old) + s * three_minus_2x0;
@@ -94,6 +103,21 @@ const INV_PAIR: [f64; BUF] = {
 pub(crate) const PAD: usize = BUF + 8;
 /// Index of `x_0` in the reversed buffer.
 const R: usize = BUF + 2;
+
+/// `Σ a_j b_j` over equal-length slices: chunks of four with four accumulators, then the rest.
+#[inline]
+fn dot_exact(a: &[f64], b: &[f64]) -> f64 {
+    let (ac, ar) = a.as_chunks::<4>();
+    let (bc, br) = b.as_chunks::<4>();
+    let mut acc = [0.0; 4];
+    for (x, y) in ac.iter().zip(bc) {
+        for i in 0..4 {
+            acc[i] += x[i] * y[i];
+        }
+    }
+    let tail: f64 = ar.iter().zip(br).map(|(x, y)| x * y).sum();
+    (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
+}
 
 /// `Σ a_j b_j` over slices whose length is a multiple of 4, with four accumulators.
 #[inline]
@@ -171,10 +195,11 @@ pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64) -> f64 {
         .iter()
         .map(|c| c[order - 1].abs())
         .fold(0.0, f64::max);
-    let r1 = (eps / prev).powf(1.0 / (order - 1) as f64);
-    let r2 = (eps / last).powf(1.0 / order as f64);
-    let safety = (-0.7 / (order - 1) as f64).exp();
-    (safety * r1.min(r2)).min(MAX_STEP)
+    // min((ε/prev)^(1/(p−1)), (ε/last)^(1/p)) times the safety factor e^(−0.7/(p−1)), in logs.
+    let ln_eps = eps.ln();
+    let l1 = (ln_eps - prev.ln() - 0.7) / (order - 1) as f64;
+    let l2 = (ln_eps - last.ln()) / order as f64 - 0.7 / (order - 1) as f64;
+    l1.min(l2).exp().min(MAX_STEP)
 }
 
 /// Upper bound on any step (time units): a series that vanishes identically gives no bound.

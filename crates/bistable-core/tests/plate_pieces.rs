@@ -97,7 +97,9 @@ fn switching_sinusoid_keeps_the_plate_continuous() {
     let before = sim.state();
     sim.set_sinusoid(2.5, 0.1).unwrap();
     let after = sim.state();
-    assert_eq!((before.x, before.v), (after.x, after.v));
+    // The mass keeps its position and velocity (to the rounding of gap + plate).
+    assert!((before.x - after.x).abs() <= f64::EPSILON * before.x.abs());
+    assert!((before.v - after.v).abs() <= f64::EPSILON * before.v.abs());
     assert!((before.z - after.z).abs() < 1e-16);
     let ev = sim.events_until(200.0).unwrap();
     assert!(!impacts(&ev).is_empty());
