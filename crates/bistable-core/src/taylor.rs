@@ -72,7 +72,7 @@ pub(crate) fn flight(
         let lin = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k];
         let c_old = dot4(&sq[..len], rev);
         // Square by symmetry: twice the pairs j < k − j, plus the middle term.
-        let half = (k + 1) / 2;
+        let half = k.div_ceil(2);
         let mut s = 2.0 * dot_exact(&xp[..half], &rev[..half]);
         if k % 2 == 0 {
             s += xp[k / 2] * xp[k / 2];
