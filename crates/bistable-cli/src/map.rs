@@ -41,7 +41,9 @@ order that covers the whole grid early), so an interrupted run loses only the
 points in progress. Run the same command again and the points already in
 --out (same Ω and V to the last bit) are skipped; rows written with another ζ or
 e are refused (the other options are not recorded in the file: resume with the
-same ones). The plot always shows every grid point found in the file.";
+same ones). While a run appends to FILE.csv it holds FILE.csv.lock (its process
+id); a second run on the same file is refused. The plot always shows every grid
+point found in the file.";
 
 /// Shown after the options by `bistable map --help`.
 pub const AFTER_HELP: &str = "\
@@ -160,6 +162,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
     let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;
     let threads = parallel::threads(args.threads, "--threads")?;
 
+    let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
     let mut done: HashMap<Key, Record> = HashMap::new();
     if let Some(out) = &args.out {
         for r in read_existing(out, &model)? {
@@ -233,6 +236,43 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         )));
     }
     Ok(())
+}
+
+/// `FILE.csv.lock` holding this process's id while it appends to `FILE.csv`, so that two runs
+/// cannot interleave their rows. A lock left by a process that no longer runs (killed) is
+/// taken over.
+struct OutLock(PathBuf);
+
+impl OutLock {
+    fn take(out: &Path) -> Result<Self, CliError> {
+        let path = PathBuf::from(format!("{}.lock", out.display()));
+        if let Ok(text) = std::fs::read_to_string(&path) {
+            let pid = text.trim();
+            let alive = !pid.is_empty()
+                && pid != std::process::id().to_string()
+                && Path::new("/proc").join(pid).exists();
+            if alive {
+                return Err(CliError::invalid_text(
+                    "--out",
+                    out.display(),
+                    format!(
+                        "is being written by another run (process {pid}, see {}); wait for it or                          stop it",
+                        path.display()
+                    ),
+                ));
+            }
+        }
+        crate::output::create_parent(&path)?;
+        std::fs::write(&path, std::process::id().to_string())
+            .map_err(|e| CliError::io("cannot write", &path, e))?;
+        Ok(Self(path))
+    }
+}
+
+impl Drop for OutLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
 }
 
 /// The indices `0..n` in an order that spreads over the whole range early (a stride coprime

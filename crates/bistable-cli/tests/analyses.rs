@@ -403,6 +403,19 @@ fn map_writes_resumes_and_classifies() {
     assert_eq!(rows.len(), 9);
     assert!(rows.iter().all(|r| r.len() == 16), "no broken rows");
 
+    // No lock is left behind; a lock held by a live process (this test) refuses the run, a
+    // stale one (no such process) is taken over.
+    let lock = dir.join("map.csv.lock");
+    assert!(!lock.exists());
+    std::fs::write(&lock, std::process::id().to_string()).unwrap();
+    let o = bistable(&map_args(s(&csv), s(&png), &[]));
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("another run"), "{}", stderr(&o));
+    std::fs::write(&lock, "999999999").unwrap();
+    let o = bistable(&map_args(s(&csv), s(&png), &[]));
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert!(!lock.exists());
+
     // The same file with another restitution is refused (exit 2, naming --out).
     let o = bistable(&map_args(s(&csv), s(&png), &["--restitution", "0.7"]));
     assert_eq!(o.status.code(), Some(2));
