@@ -118,10 +118,10 @@ fn split(b: &[f64]) -> ([f64; BUF], [f64; BUF]) {
 }
 
 /// Locates the crossing in a bracket `[lo, hi]` (in `s`) with `p(lo) > 0 ≥ p(hi)` (`ends`: these
-/// two values, when the caller knows them): safeguarded
-/// Newton (bisection when Newton leaves the bracket) until the update is below two ulps, then a
-/// short walk over neighbouring doubles to the last one where `p > 0` (bisection to adjacent
-/// doubles where `p` is too flat for the walk). Returns that double.
+/// two values, when the caller knows them). Safeguarded Newton (bisection when Newton leaves the
+/// bracket) runs until its update is below two ulps, or `p` is at its rounding level and the
+/// updates stop shrinking; then an exponential search from the last iterate and a bisection pin
+/// the last double where `p > 0` (never past the crossing), which is returned.
 fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64, ends: Option<(f64, f64)>) -> f64 {
     hi = hi.min(h);
     // Values at the ends: the Bernstein end coefficients when known, else evaluated.
@@ -135,6 +135,7 @@ fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64, ends: Option<(f64, f64)>)
     } else {
         0.5 * (lo + hi)
     };
+    let mut last_step = f64::INFINITY;
     for _ in 0..100 {
         let (p, dp, size) = eval_d_size(c, x);
         if p > 0.0 {
@@ -142,50 +143,52 @@ fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64, ends: Option<(f64, f64)>)
         } else {
             hi = x;
         }
-        // At the rounding level of p, Newton updates are noise: stop.
-        if p.abs() <= 8.0 * f64::EPSILON * size {
-            break;
-        }
         let mut next = x - p / dp;
         if !(next > lo && next < hi) {
             next = 0.5 * (lo + hi);
         }
-        if (next - x).abs() <= 2.0 * f64::EPSILON * x.abs() {
+        let step = (next - x).abs();
+        let noisy = p.abs() <= 8.0 * f64::EPSILON * size && step >= 0.5 * last_step;
+        if step <= 2.0 * f64::EPSILON * x.abs() || noisy {
             break;
         }
+        last_step = step;
         x = next;
     }
-    // Walk from the last iterate to the sign change between adjacent doubles; the sign at x
-    // is known from the loop (x is lo or hi).
+    // The last iterate is lo or hi. Exponential search away from it for the other sign, within
+    // the bracket, then bisection down to adjacent doubles.
     let positive = |v: f64| eval(c, v) > 0.0;
-    let mut y = x;
-    let mut y_positive = x == lo;
-    for _ in 0..16 {
-        if y_positive {
-            let up = y.next_up();
-            if up >= hi || !positive(up) {
-                return y;
+    let (mut a, mut b) = (lo, hi);
+    let mut d = f64::EPSILON * x.abs().max(f64::MIN_POSITIVE);
+    if x == lo {
+        while x + d < b {
+            if positive(x + d) {
+                a = x + d;
+                d *= 2.0;
+            } else {
+                b = x + d;
+                break;
             }
-            y = up;
-        } else {
-            hi = hi.min(y);
-            y = y.next_down();
-            if y <= lo {
-                return lo;
+        }
+    } else {
+        while x - d > a {
+            if positive(x - d) {
+                a = x - d;
+                break;
             }
-            y_positive = positive(y);
+            b = x - d;
+            d *= 2.0;
         }
     }
-    // p is flat here: bisect the bracket down to adjacent doubles.
     loop {
-        let mid = 0.5 * (lo + hi);
-        if mid <= lo || mid >= hi {
-            return lo;
+        let mid = 0.5 * (a + b);
+        if mid <= a || mid >= b {
+            return a;
         }
         if positive(mid) {
-            lo = mid;
+            a = mid;
         } else {
-            hi = mid;
+            b = mid;
         }
     }
 }
