@@ -118,6 +118,14 @@ pub enum Event {
 }
 
 impl Event {
+    /// The impact, if this event is one (`events.iter().filter_map(Event::impact)`).
+    pub fn impact(&self) -> Option<Impact> {
+        match self {
+            Event::Impact(i) => Some(*i),
+            _ => None,
+        }
+    }
+
     /// Instant of the event.
     pub fn t(&self) -> f64 {
         match *self {

@@ -9,14 +9,8 @@ fn run(omega: f64, v: f64, t_end: f64) -> (Simulator, Vec<Event>) {
     (sim, events)
 }
 
-fn impacts(events: &[Event]) -> Vec<Impact> {
-    events
-        .iter()
-        .filter_map(|e| match e {
-            Event::Impact(i) => Some(*i),
-            _ => None,
-        })
-        .collect()
+fn impacts(ev: &[Event]) -> Vec<Impact> {
+    ev.iter().filter_map(Event::impact).collect()
 }
 
 #[test]

@@ -6,12 +6,7 @@ use bistable_core::{
 };
 
 fn impacts(ev: &[Event]) -> Vec<Impact> {
-    ev.iter()
-        .filter_map(|e| match e {
-            Event::Impact(i) => Some(*i),
-            _ => None,
-        })
-        .collect()
+    ev.iter().filter_map(Event::impact).collect()
 }
 
 /// Largest deviation (impact time or rebound velocity) over τ ≤ 100 between the sinusoid and the

@@ -36,12 +36,7 @@ fn ours(omega: f64, v: f64, t_end: f64, opts: SolverOptions) -> (Vec<Event>, Gap
 }
 
 fn impacts(ev: &[Event]) -> Vec<Impact> {
-    ev.iter()
-        .filter_map(|e| match e {
-            Event::Impact(i) => Some(*i),
-            _ => None,
-        })
-        .collect()
+    ev.iter().filter_map(Event::impact).collect()
 }
 
 fn ref_impacts(ev: &[RefEvent]) -> Vec<&RefEvent> {
