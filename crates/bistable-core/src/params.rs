@@ -196,7 +196,7 @@ impl SolverOptions {
 }
 
 impl Default for SolverOptions {
-    /// `tol = 1e-16` (order 21: truncation error at the level of rounding, so energy drifts by
+    /// `tol = 1e-16` (order 24: truncation error at the level of rounding, so energy drifts by
     /// < 1e-12 over 10⁴ undamped natural periods) and the accumulation rule with a `1e-7` horizon.
     fn default() -> Self {
         Self {
