@@ -341,15 +341,21 @@ impl Model {
         derivatives: &PlateInputs,
         events: &mut Vec<Event>,
     ) -> Result<(), StepFailure> {
-        let tau_end = self.scale.tau(t_end);
-        let wanted = (values[var::Omega], values[var::V]);
-        let same_plate = self.mode == ShakerMode::Internal && wanted == self.applied;
+        let (tau_end, _, same_plate) = self.plan(t_end, values);
         if same_plate && tau_end < self.taylor_end {
             self.pending = Some(tau_end);
             self.time = t_end;
             return Ok(());
         }
         self.step_core(t_end, values, derivatives, events)
+    }
+
+    /// What a step to `t_end` (s) asks for: the end in core time `τ`, the requested `(Ω, V)`,
+    /// and whether the plate stays the one being integrated.
+    fn plan(&self, t_end: f64, values: &[f64]) -> (f64, (f64, f64), bool) {
+        let wanted = (values[var::Omega], values[var::V]);
+        let same_plate = self.mode == ShakerMode::Internal && wanted == self.applied;
+        (self.scale.tau(t_end), wanted, same_plate)
     }
 
     /// The part of [`Model::step`] that runs the core.
@@ -361,9 +367,7 @@ impl Model {
         derivatives: &PlateInputs,
         events: &mut Vec<Event>,
     ) -> Result<(), StepFailure> {
-        let tau_end = self.scale.tau(t_end);
-        let wanted = (values[var::Omega], values[var::V]);
-        let same_plate = self.mode == ShakerMode::Internal && wanted == self.applied;
+        let (tau_end, wanted, same_plate) = self.plan(t_end, values);
         self.sync().map_err(StepFailure::Refused)?;
         let now = self.sim.instant();
         let refuse = |e: &SimError, s: &Scale| StepFailure::Refused(describe(e, s));

@@ -4,9 +4,10 @@
 
 use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
 
-fn flow(omega: f64, v: f64, x0: f64, v0: f64, t: f64) -> (f64, f64, u64) {
+/// The paper's model shaken at `(Ω, V)`, with the mass at `(x0, v0)` at τ = 0.
+fn start(omega: f64, v: f64, x0: f64, v0: f64) -> Simulator {
     let plate = Sinusoid::new(omega, v).unwrap();
-    let mut sim = Simulator::with_state(
+    Simulator::with_state(
         Params::paper(),
         plate.into(),
         SolverOptions::default(),
@@ -14,7 +15,11 @@ fn flow(omega: f64, v: f64, x0: f64, v0: f64, t: f64) -> (f64, f64, u64) {
         x0,
         v0,
     )
-    .unwrap();
+    .unwrap()
+}
+
+fn flow(omega: f64, v: f64, x0: f64, v0: f64, t: f64) -> (f64, f64, u64) {
+    let mut sim = start(omega, v, x0, v0);
     sim.advance_to(t, &mut |_: &Event| {}).unwrap();
     let s = sim.state();
     (s.x, s.v, sim.stats().impacts)
@@ -28,16 +33,7 @@ fn variational_matrix_matches_finite_differences() {
         (0.85, 0.11, 0.02, 0.05, 2.0),
     ] {
         let t = periods * std::f64::consts::TAU / omega;
-        let plate = Sinusoid::new(omega, v).unwrap();
-        let mut sim = Simulator::with_state(
-            Params::paper(),
-            plate.into(),
-            SolverOptions::default(),
-            0.0,
-            x0,
-            v0,
-        )
-        .unwrap();
+        let mut sim = start(omega, v, x0, v0);
         sim.enable_variational();
         sim.advance_to(t, &mut |_: &Event| {}).unwrap();
         let phi = sim.variational().unwrap();
