@@ -5,13 +5,14 @@ CARGO ?= cargo
 OUT ?= out
 BISTABLE := target/release/bistable
 
-.PHONY: all setup build test test-rust lint demo bench clean
+.PHONY: all setup build test test-rust lint demo bench stress stress-core clean
 
 all: build
 
 # Component makefiles (FMU, ROS 2 node, analyses) add their own test and demo steps to these.
 TEST_TARGETS := test-rust
 DEMO_TARGETS :=
+STRESS_TARGETS := stress-core
 -include fmu/fmu.mk
 -include ros/ros.mk
 
@@ -60,6 +61,16 @@ demo: build $(DEMO_TARGETS)
 ## Criterion benches and the work-precision comparison with SciPy (writes docs/benchmarks.md).
 bench: setup
 	bash bench/run.sh
+
+## The long stress and fault campaign (docs/reliability.md): numerical long runs, FMU fault
+## sequences/fuzzing/valgrind, ROS 2 fault tests. Each component adds its steps to STRESS_TARGETS.
+stress: setup
+	$(MAKE) --no-print-directory $(STRESS_TARGETS)
+	@echo "make stress: all stress suites passed"
+
+## Numerical long runs of the core (ignored by the quick `cargo test`), figures printed.
+stress-core: setup
+	$(CARGO) test --release -p bistable-core --test stress_long -- --ignored --nocapture --test-threads 1
 
 clean:
 	$(CARGO) clean

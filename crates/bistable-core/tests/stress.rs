@@ -2,98 +2,23 @@
 //! end cleanly (or with a typed error), never put the mass below the plate by more than rounding,
 //! keep every impact consistent with the impact law, and stay within a bounded amount of work.
 
-use bistable_core::{
-    ChatterRule, Event, GapAudit, Params, SimError, Simulator, Sinusoid, SolverOptions, Well,
-};
+use bistable_core::{ChatterRule, Event, Params, Simulator, Sinusoid, SolverOptions, Well};
 
-/// xorshift64*: a small deterministic generator, so that failures reproduce.
-struct Rng(u64);
-
-impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 ^= self.0 >> 12;
-        self.0 ^= self.0 << 25;
-        self.0 ^= self.0 >> 27;
-        (self.0.wrapping_mul(0x2545_f491_4f6c_dd1d) >> 11) as f64 / (1u64 << 53) as f64
-    }
-
-    fn range(&mut self, a: f64, b: f64) -> f64 {
-        a + (b - a) * self.next()
-    }
-}
+mod support;
 
 #[test]
 fn random_parameters_states_and_tolerances() {
-    let mut rng = Rng(0x5eed_1234_abcd_0001);
-    let (mut runs, mut impacts, mut sticks, mut worst_gap) = (0, 0u64, 0u64, 0.0_f64);
-    let mut worst_law: f64 = 0.0;
-    for case in 0..300 {
-        let zeta = rng.range(0.0, 0.5);
-        let e = if case % 10 == 0 {
-            0.0
-        } else {
-            rng.range(0.0, 1.0)
-        };
-        let omega = 10f64.powf(rng.range(-2.0, 1.7)); // 0.01 … 50
-        let v = rng.range(0.0, 2.0);
-        let tol = 10f64.powf(rng.range(-16.0, -8.0));
-        let plate = Sinusoid::new(omega, v).unwrap();
-        let t0 = rng.range(0.0, 10.0);
-        let z0 = v / omega * (omega * t0).sin();
-        let x0 = z0 + rng.range(0.0, 1.0).powi(3);
-        let v0 = rng.range(-1.0, 1.0);
-        let params = Params::new(zeta, e).unwrap();
-        let opts = SolverOptions::new(tol, ChatterRule::Accumulation { horizon: 1e-7 })
-            .unwrap()
-            .with_max_chatter_impacts(10_000)
-            .unwrap();
-        let what = format!("case {case}: ζ={zeta} e={e} Ω={omega} V={v} tol={tol} x0={x0} v0={v0}");
-        let mut sim = Simulator::with_state(params, plate.into(), opts, t0, x0, v0).unwrap();
-        let mut audit = GapAudit::new(8);
-        match sim.advance_to(t0 + 40.0, &mut audit) {
-            Ok(()) => {}
-            Err(SimError::Zeno { .. }) => {}
-            Err(err) => panic!("{what}: {err}"),
-        }
-        runs += 1;
-        let st = sim.state();
-        assert!(st.x.is_finite() && st.v.is_finite(), "{what}: {st:?}");
-        assert!(
-            st.gap() >= -1e-12 * (1.0 + v / omega),
-            "{what}: gap {}",
-            st.gap()
-        );
-        // Penetration bound: rounding of x − z, relative to the plate amplitude.
-        let bound = 1e-12 * (1.0 + v / omega + x0.abs());
-        assert!(
-            audit.worst.0 >= -bound,
-            "{what}: sampled gap {:?}",
-            audit.worst
-        );
-        worst_gap = worst_gap.min(audit.worst.0);
-        // Bounded work: at most 2e5 steps for 40 time units, whatever the parameters.
-        assert!(sim.stats().steps < 200_000, "{what}: {:?}", sim.stats());
-        for ev in &audit.events {
-            match ev {
-                Event::Impact(i) => {
-                    impacts += 1;
-                    let (wm, wp) = (i.v_before - i.zdot, i.v_after - i.zdot);
-                    let scale = i.v_before.abs() + i.v_after.abs() + i.zdot.abs();
-                    let law = (wp + e * wm).abs() / scale.max(1e-300);
-                    worst_law = worst_law.max(law);
-                    assert!(wm <= 1e-15 * scale, "{what}: approaching from below {i:?}");
-                    assert!(law <= 4e-16, "{what}: impact law {law:e}");
-                    let dk = 0.5 * (i.v_after.powi(2) - i.v_before.powi(2));
-                    assert!((dk - i.delta_k).abs() <= 1e-15 * (1.0 + i.v_before.powi(2)));
-                }
-                Event::StickStart { .. } => sticks += 1,
-                _ => {}
-            }
-        }
-    }
-    println!(
-        "{runs} random runs: {impacts} impacts, {sticks} sticking phases, worst sampled gap {worst_gap:.1e}, worst impact-law residual {worst_law:.1e}"
+    let s = support::random_runs(
+        0x5eed_1234_abcd_0001,
+        300,
+        40.0,
+        &[ChatterRule::Accumulation { horizon: 1e-7 }],
     );
+    println!(
+        "{} random runs: {} impacts, {} sticking phases, {} Zeno stops, worst sampled gap {:.1e}, worst impact-law residual {:.1e}, most steps {}",
+        s.runs, s.impacts, s.sticks, s.zeno, s.worst_gap, s.worst_law, s.worst_steps
+    );
+    assert_eq!(s.runs, 300);
 }
 
 #[test]

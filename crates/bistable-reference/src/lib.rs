@@ -7,7 +7,8 @@
 //! - free flight while `x > z`: `x'' + 2ζx' + x - 3x² + 2x³ = 0`;
 //! - plate `z = (V/Ω) sin Ωτ`, `ż = V cos Ωτ`;
 //! - impact when `x = z` with `x' < ż`: `x'₊ = -e x'₋ + (1+e) ż`;
-//! - start `τ = 0`, `x = x' = 0` (impact number 0 happens at `τ = 0`);
+//! - start `τ = 0`, `x = x' = 0` (impact number 0 happens at `τ = 0`), or any state above the
+//!   plate with [`simulate_from`];
 //! - chatter/sticking per [`RefChatter`]; while stuck `x = z` until the contact force
 //!   `N = z̈ + 2ζż + z - 3z² + 2z³` turns negative.
 //!
@@ -250,7 +251,49 @@ fn validate(p: &RefParams, o: &RefOptions) -> Result<(), RefError> {
 /// (at most `o.max_events`).
 pub fn simulate(p: &RefParams, o: &RefOptions) -> Result<Vec<RefEvent>, RefError> {
     validate(p, o)?;
-    let mut run = sim::Run::new(p, o, &[], o.max_events);
+    let mut run = sim::Run::new(p, o, None, &[], o.max_events)?;
+    run.run(o.t_end)?;
+    Ok(run.events)
+}
+
+/// A start in free flight: time `t0` and the mass's position `x0` and velocity `v0`, taken
+/// exactly. `x0` must not be below the plate at `t0` (in working precision); a start on the
+/// plate moving towards it is an impact at `t0`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RefStart {
+    /// Start time `τ0 ∈ [0, 1e7]`.
+    pub t0: f64,
+    /// Position.
+    pub x0: f64,
+    /// Velocity.
+    pub v0: f64,
+}
+
+/// Simulate from `start` to `o.t_end` (`>= start.t0`) and return all events in time order
+/// (at most `o.max_events`); impacts are numbered from 0.
+pub fn simulate_from(
+    p: &RefParams,
+    o: &RefOptions,
+    start: &RefStart,
+) -> Result<Vec<RefEvent>, RefError> {
+    validate(p, o)?;
+    check(
+        start.t0.is_finite() && (0.0..=o.t_end).contains(&start.t0),
+        || format!("start t0 must be in [0, t_end], got {}", start.t0),
+    )?;
+    check(
+        start.x0.is_finite()
+            && start.v0.is_finite()
+            && start.x0.abs() <= 1e6
+            && start.v0.abs() <= 1e6,
+        || {
+            format!(
+                "start x0, v0 must be finite and at most 1e6 in size, got {}, {}",
+                start.x0, start.v0
+            )
+        },
+    )?;
+    let mut run = sim::Run::new(p, o, Some(start), &[], o.max_events)?;
     run.run(o.t_end)?;
     Ok(run.events)
 }
@@ -266,7 +309,7 @@ pub fn sample_hp(p: &RefParams, o: &RefOptions, times: &[f64]) -> Result<Vec<Ref
         })?;
     }
     let t_last = times.iter().cloned().fold(0.0, f64::max);
-    let mut run = sim::Run::new(p, o, times, usize::MAX);
+    let mut run = sim::Run::new(p, o, None, times, usize::MAX)?;
     run.run(t_last)?;
     run.finish_samples()
 }

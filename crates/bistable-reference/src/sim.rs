@@ -14,7 +14,9 @@
 use crate::poly::{eval_with_derivative, strip_zero_root, RootFinder};
 use crate::real::{sgn, to_decimal_string, to_f64, Prec, Real};
 use crate::taylor::Model;
-use crate::{RefChatter, RefError, RefEvent, RefEventKind, RefOptions, RefParams, RefSample};
+use crate::{
+    RefChatter, RefError, RefEvent, RefEventKind, RefOptions, RefParams, RefSample, RefStart,
+};
 
 enum Mode {
     /// Free flight with gap `u` and gap rate `w`.
@@ -50,26 +52,54 @@ pub(crate) struct Run {
 }
 
 impl Run {
-    pub fn new(p: &RefParams, o: &RefOptions, times: &[f64], max_events: usize) -> Run {
+    /// A run from the paper's start (`start = None`) or from `start` (which must be validated:
+    /// on or above the plate, see [`crate::simulate_from`]).
+    pub fn new(
+        p: &RefParams,
+        o: &RefOptions,
+        start: Option<&RefStart>,
+        times: &[f64],
+        max_events: usize,
+    ) -> Result<Run, RefError> {
         let prec = Prec { bits: o.bits };
         let m = Model::new(prec, p.zeta, p.restitution, p.omega, p.velocity);
         let zero = prec.zero();
-        // τ = 0: x = x' = 0, z = 0, ż = V, so u = 0 and w = -V (impact 0 happens at once).
-        let mode = Mode::Free {
-            u: zero.clone(),
-            w: -m.v.clone(),
+        // Paper's start τ = 0: x = x' = 0, z = 0, ż = V, so u = 0 and w = -V (impact 0 happens
+        // at once). Otherwise the given state, exactly.
+        let (tau, mode, well) = match start {
+            None => (
+                zero.clone(),
+                Mode::Free {
+                    u: zero.clone(),
+                    w: -m.v.clone(),
+                },
+                1,
+            ),
+            Some(st) => {
+                let tau = prec.exact(st.t0);
+                let (z, zd) = m.plate(&tau);
+                let u = prec.exact(st.x0) - z;
+                if sgn(&u) < 0 {
+                    return Err(RefError::InvalidInput(format!(
+                        "start x0 = {} is below the plate at t0 = {}",
+                        st.x0, st.t0
+                    )));
+                }
+                let w = prec.exact(st.v0) - zd;
+                (tau, Mode::Free { u, w }, if st.x0 > 0.5 { 2 } else { 1 })
+            }
         };
         let mut sample_order: Vec<usize> = (0..times.len()).collect();
         sample_order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
-        Run {
+        Ok(Run {
             rf: RootFinder::new(prec),
             m,
             chatter: o.chatter,
             max_events,
             events: Vec::new(),
-            tau: zero,
+            tau,
             mode,
-            well: 1,
+            well,
             impacts: 0,
             stick_starts: 0,
             stick_ends: 0,
@@ -81,7 +111,7 @@ impl Run {
             sample_order,
             next_sample: 0,
             samples: vec![None; times.len()],
-        }
+        })
     }
 
     fn prec(&self) -> Prec {

@@ -335,3 +335,52 @@ fn baseline_to_1000_matches_the_256_bit_run() {
     assert!(d < 1e-33, "last impact {} vs {LAST_256}: {d:e}", last.t_str);
     println!("(1.75, 0.07), tau <= 1000, 128 bits: {elapsed:?}, |t_277 - t_277(256 bits)| = {d:e}");
 }
+
+#[test]
+fn a_start_state_continues_the_run_it_was_taken_from() {
+    // The paper's start given explicitly reproduces `simulate`; a start taken from a sample of
+    // that run (full precision rounded to f64, so slightly off the orbit) reproduces the later
+    // impact times to the size of the rounding.
+    let p = params(1.75, 0.07);
+    let o = opts(128, 30.0);
+    let full = simulate(&p, &o).unwrap();
+    let same = simulate_from(
+        &p,
+        &o,
+        &RefStart {
+            t0: 0.0,
+            x0: 0.0,
+            v0: 0.0,
+        },
+    )
+    .unwrap();
+    assert_eq!(full, same);
+    let t0 = 0.5 * (full[3].t + full[4].t);
+    let s = &sample(&p, &o, &[t0]).unwrap()[0];
+    let later = simulate_from(
+        &p,
+        &o,
+        &RefStart {
+            t0,
+            x0: s.1,
+            v0: s.2,
+        },
+    )
+    .unwrap();
+    let a = impacts(&full);
+    let b = impacts(&later);
+    assert_eq!(a.len() - 4, b.len());
+    for (x, y) in a[4..].iter().zip(&b) {
+        assert!((x.t - y.t).abs() < 1e-12, "{} vs {}", x.t, y.t);
+    }
+    // Below the plate is refused.
+    let below = RefStart {
+        t0: 1.0,
+        x0: -1.0,
+        v0: 0.0,
+    };
+    assert!(matches!(
+        simulate_from(&p, &o, &below),
+        Err(RefError::InvalidInput(_))
+    ));
+}
