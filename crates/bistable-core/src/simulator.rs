@@ -664,6 +664,12 @@ impl Simulator {
             sim.step.end = StepEnd::Stick(cause);
             sim.step.riding = true;
             sim.live = true;
+        } else if now > t0 {
+            // The original was inside the step from `t0` (only a computed step moves `now` past
+            // its start): recompute it (the same inputs give the same series) so that `state()`
+            // is the dense output at `now`, without counting it or showing it to observers again.
+            sim.compute_step()?;
+            sim.live = true;
         }
         Ok(sim)
     }

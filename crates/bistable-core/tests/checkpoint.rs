@@ -27,11 +27,15 @@ fn restored_runs_continue_identically() {
             let mut original = sim.clone();
             let mut restored = Simulator::from_checkpoint(&cp).unwrap();
             assert_eq!(restored.checkpoint(), cp);
+            // The state right after the restore is the original's (mid-flight: the dense output
+            // at `now`, not the step's start gap moved with the plate).
+            assert_eq!(restored.state(), sim.state(), "Ω = {omega}, t = {t}");
             assert_eq!(
                 continue_from(&mut original, t_end),
                 continue_from(&mut restored, t_end),
                 "Ω = {omega}, checkpoint at t = {t}"
             );
+            assert_eq!(restored.stats(), original.stats());
         }
     }
 }

@@ -408,3 +408,64 @@ fn chatter_always_ends() {
         }
     }
 }
+
+/// Communication points change nothing: 10,000 random cases (as in the random runs, τ = 50) run
+/// once in one call and once through 200–2,000 random output instants (gaps from 0 — the same
+/// instant twice — through 1e-12 to whole periods), with a checkpoint/restore at every tenth
+/// instant. The events and the final state must be bit-identical.
+#[test]
+#[ignore]
+fn random_communication_points_change_nothing() {
+    let mut rng = support::Rng(0xc0de_0000_0000_0007);
+    let (mut calls, mut restores, mut impacts) = (0u64, 0u64, 0u64);
+    for case in 0..10_000 {
+        let zeta = rng.range(0.0, 0.5);
+        let e = rng.range(0.0, 1.0);
+        let omega = 10f64.powf(rng.range(-2.0, 1.7));
+        let v = rng.range(0.0, 2.0);
+        let tol = 10f64.powf(rng.range(-16.0, -8.0));
+        let plate = Sinusoid::new(omega, v).unwrap();
+        let params = Params::new(zeta, e).unwrap();
+        let opts = SolverOptions::new(tol, ChatterRule::Accumulation { horizon: 1e-7 }).unwrap();
+        let what = format!("case {case}: ζ={zeta} e={e} Ω={omega} V={v} tol={tol}");
+        let t_end = 50.0;
+        let mut one = Simulator::new(params, plate.into(), opts).unwrap();
+        let expected = match one.events_until(t_end) {
+            Ok(ev) => ev,
+            Err(SimError::Zeno { .. }) => continue,
+            Err(err) => panic!("{what}: {err}"),
+        };
+        let mut sim = Simulator::new(params, plate.into(), opts).unwrap();
+        let mut got = Vec::new();
+        let mut t = 0.0;
+        let mut k = 0u64;
+        while t < t_end {
+            t = match rng.next() {
+                r if r < 0.1 => t,
+                r if r < 0.2 => t + 1e-12,
+                r if r < 0.5 => t + rng.range(0.0, 0.05),
+                _ => t + rng.range(0.0, 0.5),
+            }
+            .min(t_end);
+            sim.advance_to(t, &mut |e: &Event| got.push(*e))
+                .unwrap_or_else(|err| panic!("{what}: {err}"));
+            calls += 1;
+            k += 1;
+            if k % 10 == 0 {
+                sim = Simulator::from_checkpoint(&sim.checkpoint()).unwrap();
+                restores += 1;
+            }
+        }
+        assert_eq!(got, expected, "{what}");
+        let (a, b) = (one.state(), sim.state());
+        assert_eq!(
+            (a.x.to_bits(), a.v.to_bits()),
+            (b.x.to_bits(), b.v.to_bits()),
+            "{what}"
+        );
+        impacts += one.stats().impacts;
+    }
+    println!(
+        "10,000 random cases: {calls} communication points, {restores} checkpoint restores, {impacts} impacts, all bit-identical to one call"
+    );
+}
