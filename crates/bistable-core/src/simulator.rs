@@ -214,8 +214,10 @@ enum StepEnd {
     Impact,
     /// `x = ½`.
     Barrier,
-    /// The contact force turns negative.
-    Release,
+    /// The contact force turns negative (`at_root`: at a root of `N`, so the gap's curvature
+    /// `−N/2` vanishes there too); otherwise `N` is already negative at the step's start, which
+    /// only a change of plate motion while the mass rides can cause.
+    Release { at_root: bool },
     /// A chatter sequence accumulates (or the mass is pushed with no relative velocity).
     Stick(StickCause),
 }
@@ -501,7 +503,10 @@ impl Simulator {
     }
 
     /// Switches the plate motion at the current time. The new motion must continue the plate
-    /// position (within `1e-12` relative); the integration restarts here.
+    /// position (within `1e-12` relative); the integration restarts here. Its velocity may jump:
+    /// a mass in flight keeps its velocity (an impact follows at once if the plate now moves
+    /// into it); a mass riding the plate stays on it and moves with the new velocity while the
+    /// contact force is non-negative, and is released at once if the new motion pulls away.
     pub fn set_plate(&mut self, plate: PlateMotion) -> Result<(), SimError> {
         let now = self.now;
         if let Some(h) = plate.horizon() {
@@ -761,7 +766,9 @@ impl Simulator {
                 step.series.x[..BUF].copy_from_slice(&z);
                 let m = n.iter().position(|&c| c != 0.0);
                 if m.is_some_and(|m| n[m] < 0.0) {
-                    step.end = StepEnd::Release;
+                    step.end = StepEnd::Release {
+                        at_root: m != Some(0),
+                    };
                     return Ok(());
                 }
                 let h = taylor::step_size(&[&z[..=p], n], p, tol).min(room);
@@ -772,7 +779,7 @@ impl Simulator {
                 step.end = StepEnd::Plain;
                 if let Some(r) = m.and_then(|m| first_root(&n[m..], h)) {
                     step.len = r;
-                    step.end = StepEnd::Release;
+                    step.end = StepEnd::Release { at_root: true };
                 }
                 if let Some(r) = barrier_root(self.well, self.on_barrier, &z[..=p], step.len) {
                     step.len = r;
@@ -797,12 +804,12 @@ impl Simulator {
         if step.riding {
             self.pinned = 0;
             return Ok(match step.end {
-                StepEnd::Release => {
+                StepEnd::Release { at_root } => {
                     self.mode = ContactMode::Free;
                     self.u0 = 0.0;
                     self.w0 = 0.0;
-                    // Gap, its rate and (at the root of N) its curvature vanish.
-                    self.pinned = 3;
+                    // Gap, its rate and (at a root of N) its curvature vanish.
+                    self.pinned = if at_root { 3 } else { 2 };
                     let (z, zd, _) = self.plate.motion(t1);
                     obs.event(&Event::StickEnd {
                         t: t1.to_f64(),
@@ -838,7 +845,7 @@ impl Simulator {
             StepEnd::Barrier => self.cross_barrier(t1, obs),
             StepEnd::Impact => return self.impact(t1, w1.min(0.0), obs),
             StepEnd::Stick(cause) => self.stick(t1, cause, just_released, obs),
-            StepEnd::Release => ControlFlow::Continue(()),
+            StepEnd::Release { .. } => ControlFlow::Continue(()),
         })
     }
 

@@ -89,3 +89,34 @@ fn quasi_static_escape_threshold() {
     assert!(!escapes(0.49 * omega), "amplitude 0.49 escaped");
     assert!(escapes(0.51 * omega), "amplitude 0.51 did not escape");
 }
+
+#[test]
+fn set_point_change_that_pulls_the_riding_mass_off_releases_it() {
+    // Regression (found by `make stress`): the mass rides the plate above the barrier (x ≈ 0.6,
+    // where the spring pulls it towards x = 1) when the shaker slows down; the contact force
+    // is negative at once. The release used to treat the gap's curvature −N/2 as zero (as at a
+    // root of N) and stuck the mass again at the same instant, forever (reported as NonFinite).
+    let params = Params::new(0.297834921580372, 0.3847785231919063).unwrap();
+    let plate = Sinusoid::new(0.4853486184497703, 0.16201005289944959).unwrap();
+    let opts = SolverOptions::new(1e-15, ChatterRule::Accumulation { horizon: 1e-7 }).unwrap();
+    let mut sim = Simulator::new(params, plate.into(), opts).unwrap();
+    sim.advance_to(0.3137848890542212, &mut |_: &Event| {})
+        .unwrap();
+    sim.set_sinusoid(0.10925493178727466, 0.2940391126452826)
+        .unwrap();
+    sim.advance_to(2.2409469048007455, &mut |_: &Event| {})
+        .unwrap();
+    assert_eq!(sim.state().mode, bistable_core::ContactMode::Sticking);
+    sim.set_sinusoid(0.3018203213182035, 0.028326508329765798)
+        .unwrap();
+    let ev = sim.events_until(3.0).unwrap();
+    assert!(
+        matches!(ev[0], Event::StickEnd { t, .. } if t == 2.2409469048007455),
+        "{ev:?}"
+    );
+    assert!(
+        !ev.iter().any(|e| matches!(e, Event::StickStart { .. })),
+        "{ev:?}"
+    );
+    assert!(sim.state().gap() > 1e-3, "{:?}", sim.state());
+}

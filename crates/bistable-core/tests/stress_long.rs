@@ -469,3 +469,64 @@ fn random_communication_points_change_nothing() {
         "10,000 random cases: {calls} communication points, {restores} checkpoint restores, {impacts} impacts, all bit-identical to one call"
     );
 }
+
+/// Shaker set-points changed at random instants (as the FMU's and the node's shaker commands
+/// do): 2,000 random cases, each with 40 switches of (Ω, V) at random times (also while the mass
+/// rides the plate and in chatter). The plate position never jumps, the mass never goes below
+/// the plate beyond rounding, every impact obeys the impact law, and runs end cleanly.
+#[test]
+#[ignore]
+fn random_shaker_set_point_changes() {
+    let mut rng = support::Rng(0x5e75_0000_0000_0011);
+    let (mut switches, mut impacts, mut sticky, mut worst_gap, mut worst_jump) =
+        (0u64, 0u64, 0u64, 0.0_f64, 0.0_f64);
+    for case in 0..2000 {
+        let params = Params::new(rng.range(0.0, 0.5), rng.range(0.0, 1.0)).unwrap();
+        let draw = |rng: &mut support::Rng| (10f64.powf(rng.range(-1.5, 1.0)), rng.range(0.0, 0.5));
+        let (omega, v) = draw(&mut rng);
+        let plate = Sinusoid::new(omega, v).unwrap();
+        let opts = SolverOptions::new(1e-15, ChatterRule::Accumulation { horizon: 1e-7 }).unwrap();
+        let mut sim = Simulator::new(params, plate.into(), opts).unwrap();
+        let mut audit = GapAudit::new(8);
+        let mut t = 0.0;
+        for _ in 0..40 {
+            t += rng.range(0.0, 2.0);
+            let what = format!("case {case} at t = {t}: {params:?}");
+            sim.advance_to(t, &mut audit)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let before = sim.state();
+            sticky += u64::from(before.mode == bistable_core::ContactMode::Sticking);
+            let (omega, v) = draw(&mut rng);
+            sim.set_sinusoid(omega, v)
+                .unwrap_or_else(|e| panic!("{what}: {e}"));
+            let after = sim.state();
+            let jump = (after.z - before.z).abs();
+            worst_jump = worst_jump.max(jump);
+            assert!(
+                jump <= 1e-12 * (1.0 + before.z.abs()),
+                "{what}: plate jumped by {jump:e}"
+            );
+            assert!(
+                after.x.is_finite() && after.gap() >= -1e-12,
+                "{what}: {after:?}"
+            );
+            switches += 1;
+        }
+        sim.advance_to(t + 5.0, &mut audit).unwrap();
+        worst_gap = worst_gap.min(audit.worst.0);
+        assert!(audit.worst.0 >= -1e-12, "case {case}: {:?}", audit.worst);
+        let e = params.restitution();
+        for i in audit.events.iter().filter_map(|e| e.impact()) {
+            impacts += 1;
+            let (wm, wp) = (i.v_before - i.zdot, i.v_after - i.zdot);
+            let scale = i.v_before.abs() + i.v_after.abs() + i.zdot.abs();
+            assert!(
+                (wp + e * wm).abs() <= 4e-16 * scale.max(1e-300),
+                "case {case}: {i:?}"
+            );
+        }
+    }
+    println!(
+        "2,000 random cases: {switches} set-point changes ({sticky} while riding the plate), {impacts} impacts, worst sampled gap {worst_gap:.1e}, largest plate jump {worst_jump:.1e}"
+    );
+}
