@@ -11,7 +11,9 @@ use bistable_core::Event;
 
 use crate::fmi2::*;
 use crate::md::{cat, var, Causality, Kind, CATEGORIES, VARS};
-use crate::model::{Model, PlateInputs, StepFailure, MAX_PLATE_ORDER};
+use crate::model::{
+    Model, PlateInputs, StepFailure, MAX_CLOCK_SPAN, MAX_PLATE_ORDER, MAX_STEP_SPAN,
+};
 use crate::state::Snapshot;
 
 /// FMI 2.0 co-simulation states (steps are synchronous: no `stepInProgress`/`stepCanceled`).
@@ -451,15 +453,19 @@ impl Instance {
         };
         let now = model.time;
         let t_end = tc + h;
+        let span = clock_span(&self.values, self.start_time, t_end);
+        let step_span = clock_span(&self.values, now, t_end);
         let valid = h.is_finite()
             && h > 0.0
             && (tc - now).abs() <= slack(now)
             && t_end > now
             && self
                 .stop_time
-                .is_none_or(|stop| t_end <= stop + slack(stop));
+                .is_none_or(|stop| t_end <= stop + slack(stop))
+            && span < MAX_CLOCK_SPAN
+            && step_span <= MAX_STEP_SPAN;
         if !valid {
-            return Err(step_refusal(tc, h, now, self.stop_time));
+            return Err(step_refusal(tc, h, now, self.stop_time, span, step_span));
         }
         let result = model.step(t_end, &self.values, &self.derivatives, &mut self.events);
         self.outputs_stale = true;
@@ -558,11 +564,44 @@ impl Instance {
         {
             return Err("FMU state: non-finite time or input derivative".into());
         }
+        if s.stop_time.is_some_and(|stop| stop < s.start_time) {
+            return Err("FMU state: stop time before the start time".into());
+        }
+        // Discard sets `terminated` and leaves StepFailed; only Terminated keeps it (and Error,
+        // which may follow anything).
+        let terminated_ok = match s.lifecycle {
+            Lifecycle::StepFailed => s.terminated,
+            Lifecycle::Terminated | Lifecycle::Error => true,
+            _ => !s.terminated,
+        };
+        if !terminated_ok {
+            return Err(format!(
+                "FMU state: terminated = {} in state {:?}",
+                s.terminated, s.lifecycle
+            ));
+        }
+        if let Some(m) = &s.model {
+            // A running simulation is at its last successful time, between start and stop.
+            let stop_ok = s.stop_time.is_none_or(|stop| m.time <= stop + slack(stop));
+            if m.time != s.last_successful_time
+                || m.time < s.start_time - slack(s.start_time)
+                || !stop_ok
+            {
+                return Err(format!(
+                    "FMU state: time {} s, last successful time {} s, start {} s and stop {:?} s are inconsistent",
+                    m.time, s.last_successful_time, s.start_time, s.stop_time
+                ));
+            }
+        }
         let needs_model = !matches!(
             s.lifecycle,
             Lifecycle::Instantiated | Lifecycle::InitializationMode
         );
         match &s.model {
+            Some(_) if !needs_model && s.lifecycle != Lifecycle::Error => Err(format!(
+                "FMU state: a running model in state {:?}",
+                s.lifecycle
+            )),
             Some(m) => Model::restore(&s.values, m)
                 .map(Some)
                 .map_err(|e| format!("FMU state: {e}")),
@@ -625,9 +664,20 @@ fn slack(t: f64) -> f64 {
     1e-9 * t.abs().max(1.0)
 }
 
+/// `|τ_end − τ_from|·max(Ω, 1)` for the times `from` and `t_end` (s): the shaker radians, or
+/// natural time units when `Ω < 1`, between them (NaN-safe: a non-finite span is infinite).
+fn clock_span(values: &[f64], start: f64, t_end: f64) -> f64 {
+    let span = ((t_end - start) * values[var::omega0]).abs() * values[var::Omega].max(1.0);
+    if span.is_nan() {
+        f64::INFINITY
+    } else {
+        span
+    }
+}
+
 /// Why `fmi2DoStep(tc, h)` is refused at the FMU time `now` (s).
 #[cold]
-fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>) -> String {
+fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>, span: f64, step_span: f64) -> String {
     let t_end = tc + h;
     if !(h.is_finite() && h > 0.0) {
         format!("communicationStepSize = {h} s must be finite and > 0")
@@ -635,6 +685,14 @@ fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>) -> String {
         format!("currentCommunicationPoint = {tc} s does not match the FMU's time {now} s")
     } else if t_end <= now {
         format!("the step ends at {t_end} s, not after the FMU's time {now} s")
+    } else if span >= MAX_CLOCK_SPAN {
+        format!(
+            "the step ends at {t_end} s, {span:e} shaker radians (time units when Omega < 1) after the start time: beyond the FMU's clock range of 2^52"
+        )
+    } else if step_span > MAX_STEP_SPAN {
+        format!(
+            "the step from {now} s to {t_end} s spans {step_span:e} shaker radians (time units when Omega < 1), more than {MAX_STEP_SPAN:e} in one fmi2DoStep: its cost grows with its length, split it into shorter steps"
+        )
     } else {
         format!(
             "the step ends at {t_end} s, beyond stopTime = {} s",

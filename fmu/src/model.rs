@@ -10,12 +10,30 @@ use std::ops::ControlFlow;
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Instant, Observer, ParamError, Params,
     PlateMotion, PlateRecord, PolyPiece, SimError, Simulator, Sinusoid, SolverOptions, StepView,
+    Well,
 };
 
 use crate::md::var;
 
 /// Highest plate derivative that an external piece carries (degree of `PolyPiece`).
 pub const MAX_PLATE_ORDER: usize = bistable_core::shaker::MAX_POLY_DEGREE;
+
+/// Largest span `Ω·|τ − τ_origin|` (shaker radians; time units when `Ω < 1`) from the origin
+/// of a sinusoid: the core keeps the shaker phase accurate below 2^52 (`Instant::angle`), and a
+/// step costs time in proportion to the periods it spans, so a request beyond this (e.g.
+/// `h = 1e20` s) could never finish.
+pub(crate) const MAX_CLOCK_SPAN: f64 = 4_503_599_627_370_496.0;
+
+/// Largest span `Ω·(τ_end − τ)` (time units when `Ω < 1`) of one `fmi2DoStep`: the work of a
+/// step grows with it (about 0.5 µs per shaker radian at the paper's baseline), so a longer step
+/// is refused rather than left to run for minutes; split it into several.
+pub(crate) const MAX_STEP_SPAN: f64 = 1e6;
+
+/// Whether a sinusoid of frequency `omega` with origin `origin` is within the clock range at
+/// `now` (and the origin not after it).
+fn origin_in_range(omega: f64, origin: Instant, now: Instant) -> bool {
+    origin <= now && omega.max(1.0) * now.since(origin) < MAX_CLOCK_SPAN
+}
 
 /// Chatter rule of the FMU (the core's default, as the CLI uses).
 fn chatter_rule() -> ChatterRule {
@@ -142,15 +160,29 @@ pub struct Model {
 struct Collect<'a> {
     events: &'a mut Vec<Event>,
     taylor_end: &'a mut f64,
+    /// Taylor steps computed so far in this advance.
+    steps: u64,
 }
+
+/// Most Taylor steps one `fmi2DoStep` may compute (a few seconds): beyond it the advance stops
+/// at the next event and the step is a Discard. Steps of ordinary length stay far below it
+/// (`MAX_STEP_SPAN`, about 4 steps per time unit at the paper's baseline); it stops a state
+/// driven far outside the model's scope (e.g. a plate input of 1e24 in units of delta_x*omega0,
+/// whose oscillations need ever shorter steps) from integrating for hours.
+const MAX_CORE_STEPS: u64 = 10_000_000;
 
 impl Observer for Collect<'_> {
     fn event(&mut self, e: &Event) -> ControlFlow<()> {
         self.events.push(*e);
-        ControlFlow::Continue(())
+        if self.steps > MAX_CORE_STEPS {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
     }
 
     fn step(&mut self, step: &StepView<'_>) {
+        self.steps += 1;
         // Rounded end, lowered by a few ulps so that "target < taylor_end" implies the core
         // would find the target inside this step.
         let end = step.t0() + step.len();
@@ -245,6 +277,7 @@ impl Model {
         let mut obs = Collect {
             events,
             taylor_end: &mut taylor_end,
+            steps: 0,
         };
         sim.advance_to(tau0, &mut obs)
             .map_err(|e| describe(&e, &scale))?;
@@ -276,18 +309,52 @@ impl Model {
         if external != (ShakerMode::of(values[var::shaker_mode]) == Some(ShakerMode::External)) {
             return Err("the FMU state's plate does not match its shaker_mode".into());
         }
+        check_checkpoint(cp)?;
         let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
+        check_inside_step(&sim)?;
         let (omega, v, hi, lo, phase0, offset) = saved.phase_ref;
         let origin = Instant::from_parts(hi, lo).ok_or("invalid phase origin in the FMU state")?;
+        if !(phase0.abs() <= std::f64::consts::PI && origin_in_range(omega, origin, sim.instant()))
+        {
+            return Err(format!(
+                "the FMU state's phase reference (origin {} s, phase {phase0} rad) is out of range",
+                scale.time(origin.to_f64())
+            ));
+        }
+        // The phase reference follows the shaker parameters in force; in internal mode it is
+        // the plate itself.
+        let ref_record = PlateRecord::Sinusoid {
+            omega,
+            velocity: v,
+            origin: (hi, lo),
+            phase0,
+            offset,
+        };
+        let internal_plate_ok = external || cp.plate == ref_record;
+        if (omega, v) != saved.applied || !internal_plate_ok {
+            return Err(
+                "the FMU state's phase reference does not match its shaker or plate".into(),
+            );
+        }
         let phase_ref = Sinusoid::new(omega, v)
             .and_then(|s| s.with_origin(origin, phase0, offset))
             .map_err(|e| describe_param(&e))?;
         let mode = ShakerMode::of(values[var::shaker_mode])
             .ok_or("invalid shaker_mode in the FMU state")?;
-        if !saved.time.is_finite() {
-            return Err("invalid time in the FMU state".into());
+        // The communication time must be where the simulator is (a step or a Discard leaves
+        // them equal up to the rounding of `t = τ/ω0`): a state claiming another time would
+        // refuse every step or make the next one integrate across the difference.
+        let tau = sim.time();
+        if !(saved.time.is_finite()
+            && (scale.tau(saved.time) - tau).abs() <= 1e-12 * tau.abs().max(1.0))
+        {
+            return Err(format!(
+                "the FMU state's time {} s does not match its simulator's time {} s",
+                saved.time,
+                scale.time(tau)
+            ));
         }
-        Ok(Self {
+        let mut model = Self {
             sim,
             scale,
             mode,
@@ -296,7 +363,51 @@ impl Model {
             time: saved.time,
             pending: None,
             taylor_end: f64::NEG_INFINITY,
-        })
+        };
+        model.check_physical(values)?;
+        Ok(model)
+    }
+
+    /// What every state the model reaches satisfies (checked on restored states): the mass is
+    /// not below the plate (beyond rounding), its well is the side of the barrier it is on, the
+    /// last impact is not in the future, and every output is finite.
+    fn check_physical(&mut self, values: &[f64]) -> Result<(), String> {
+        let st = self.sim.state();
+        let size = 1f64.max(st.x.abs()).max(st.z.abs());
+        let above = st.x - st.z >= -1e-12 * size; // false for NaN
+        if !above {
+            return Err(format!(
+                "the FMU state puts the mass below the plate (x - z = {} m)",
+                self.scale.length(st.x - st.z)
+            ));
+        }
+        if (st.x - potential::BARRIER).abs() > 1e-9 && st.well != Well::of(st.x) {
+            return Err(format!(
+                "the FMU state's well {} does not match the mass position x = {} m",
+                st.well.number(),
+                self.scale.length(st.x)
+            ));
+        }
+        if let Some(i) = self.sim.last_impact() {
+            let past = i.t <= st.t;
+            if !past || !i.phase.is_none_or(|p| (0.0..1.0).contains(&p)) {
+                return Err(format!(
+                    "the FMU state's last impact (t = {} s, phase {:?}) is not a past impact",
+                    self.scale.time(i.t),
+                    i.phase
+                ));
+            }
+        }
+        let mut out = values.to_vec();
+        self.write_outputs(&mut out)?;
+        if let Some(k) = out.iter().position(|v| !v.is_finite()) {
+            return Err(format!(
+                "the FMU state gives the non-finite output {} = {}",
+                crate::md::VARS[k].name,
+                out[k]
+            ));
+        }
+        Ok(())
     }
 
     /// Advances the core to the communication time if a step left it behind (see `pending`).
@@ -370,46 +481,114 @@ impl Model {
         let (tau_end, wanted, same_plate) = self.plan(t_end, values);
         self.sync().map_err(StepFailure::Refused)?;
         let now = self.sim.instant();
+        let moves = Instant::new(tau_end).since(now) > 0.0;
+        if !moves {
+            // A step shorter than the resolution of the core's time (e.g. h = 5e-324 s, or
+            // omega0 < 1): nothing moves, only the communication time.
+            self.time = t_end;
+            return Ok(());
+        }
         let refuse = |e: &SimError, s: &Scale| StepFailure::Refused(describe(e, s));
-        if wanted != self.applied {
-            let (omega, v) = wanted;
-            self.phase_ref = PlateMotion::from(self.phase_ref)
+        // The model at the communication point, to go back to if the step fails in a way that
+        // leaves no usable state (a few hundred bytes; this path computes Taylor steps anyway).
+        let undo = (self.sim.checkpoint(), self.phase_ref, self.applied);
+        let undo_time = self.time;
+        // A refused step leaves the model as it was: everything that can fail comes before the
+        // first change (the phase reference, the plate), and each change is checked by the core
+        // before it takes effect.
+        let (omega, v) = wanted;
+        let phase_ref = if wanted != self.applied {
+            PlateMotion::from(self.phase_ref)
                 .continued_by_sinusoid(now, omega, v)
-                .map_err(|e| StepFailure::Refused(describe_param(&e)))?;
-            if self.mode == ShakerMode::Internal {
-                self.sim
-                    .set_sinusoid(omega, v)
-                    .map_err(|e| refuse(&e, &self.scale))?;
+                .map_err(|e| StepFailure::Refused(describe_param(&e)))?
+        } else {
+            self.phase_ref
+        };
+        match self.mode {
+            ShakerMode::External => {
+                let z_now = self.sim.state().z;
+                let inputs = plate_inputs(values, derivatives);
+                let piece = plate_piece(&self.scale, now, tau_end, &inputs, Some(z_now))
+                    .map_err(StepFailure::Refused)?;
+                if let Err(e) = self.sim.set_plate(piece.into()) {
+                    self.undo(&undo);
+                    return Err(refuse(&e, &self.scale));
+                }
             }
-            self.applied = wanted;
+            ShakerMode::Internal if wanted != self.applied => self
+                .sim
+                .set_sinusoid(omega, v)
+                .map_err(|e| refuse(&e, &self.scale))?,
+            ShakerMode::Internal => {}
         }
-        if self.mode == ShakerMode::External {
-            let z_now = self.sim.state().z;
-            let inputs = plate_inputs(values, derivatives);
-            let piece = plate_piece(&self.scale, now, tau_end, &inputs, Some(z_now))
-                .map_err(StepFailure::Refused)?;
-            self.sim
-                .set_plate(piece.into())
-                .map_err(|e| refuse(&e, &self.scale))?;
-        }
+        self.phase_ref = phase_ref;
+        self.applied = wanted;
         if !same_plate {
             self.taylor_end = f64::NEG_INFINITY;
         }
         let mut obs = Collect {
-            events,
+            events: &mut *events,
             taylor_end: &mut self.taylor_end,
+            steps: 0,
         };
-        let result = self.sim.advance_to(tau_end, &mut obs);
+        let advanced = self.sim.advance(tau_end, &mut obs);
+        // Stopped by the observer: the work budget is spent.
+        let over_budget = matches!(advanced, Ok(false));
+        let result = match advanced {
+            Ok(true) => Ok(()),
+            Ok(false) => Err(SimError::NonFinite { t: self.sim.time() }),
+            Err(e) => Err(e),
+        };
+        // A step that ends in a state with non-finite outputs (energies of a solution near the
+        // overflow range) or one the core should never reach is not a success either.
+        let result = result.and_then(|()| match self.check_physical(values) {
+            Ok(()) => Ok(()),
+            Err(_) => Err(SimError::NonFinite { t: self.sim.time() }),
+        });
         match result {
             Ok(()) => {
                 self.time = t_end;
                 Ok(())
             }
             Err(e @ (SimError::Zeno { .. } | SimError::NonFinite { .. })) => {
+                let msg = if over_budget {
+                    format!(
+                        "more than {MAX_CORE_STEPS} integration steps in one fmi2DoStep at t = {} s: the state is far outside the model's scope",
+                        self.scale.time(self.sim.time())
+                    )
+                } else {
+                    describe(&e, &self.scale)
+                };
                 self.time = self.scale.time(self.sim.time());
-                Err(StepFailure::Stopped(describe(&e, &self.scale)))
+                // Where the core stopped is kept only if it is a usable state (a solution that
+                // overflowed may leave huge velocities whose energies are infinite, or a mass
+                // that crossed the barrier inside the failed step); otherwise the model goes back
+                // to the communication point, which was.
+                if let Err(why) = self.check_physical(values) {
+                    self.undo(&undo);
+                    self.time = undo_time;
+                    events.clear();
+                    return Err(StepFailure::Stopped(format!(
+                        "{msg}; the state where it stopped is not usable ({why}), so the FMU stays at the start of the step"
+                    )));
+                }
+                Err(StepFailure::Stopped(msg))
             }
-            Err(e) => Err(refuse(&e, &self.scale)),
+            Err(e) => {
+                self.undo(&undo);
+                Err(refuse(&e, &self.scale))
+            }
+        }
+    }
+
+    /// Back to the state saved before a step (see [`Model::step_core`]).
+    fn undo(&mut self, (cp, phase_ref, applied): &(Checkpoint, Sinusoid, (f64, f64))) {
+        if let Ok(sim) = Simulator::from_checkpoint(cp) {
+            self.sim = sim;
+            self.phase_ref = *phase_ref;
+            self.applied = *applied;
+            self.taylor_end = f64::NEG_INFINITY;
+            self.pending = None;
         }
     }
 
@@ -504,6 +683,95 @@ impl Model {
     }
 }
 
+/// Checks of a saved core state beyond the core's own (`Simulator::from_checkpoint`): angles
+/// reduced as the core leaves them, the last impact not after the current time.
+fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
+    // Malformed instants are refused by the core.
+    let Some(now) = Instant::from_parts(cp.now.0, cp.now.1) else {
+        return Ok(());
+    };
+    if let PlateRecord::Sinusoid {
+        omega,
+        origin: (hi, lo),
+        phase0,
+        ..
+    } = cp.plate
+    {
+        let in_range =
+            Instant::from_parts(hi, lo).is_none_or(|origin| origin_in_range(omega, origin, now));
+        if !(phase0.abs() <= std::f64::consts::PI && in_range) {
+            return Err(format!(
+                "the FMU state's plate sinusoid (origin {hi}, phase {phase0} rad) is out of range"
+            ));
+        }
+    }
+    let last = cp
+        .last_impact_t
+        .and_then(|(hi, lo)| Instant::from_parts(hi, lo));
+    if last.is_some_and(|last| last > now) {
+        return Err("the FMU state's last impact is after its current time".into());
+    }
+    // The last impact is the one counted last, at the recorded instant.
+    let counted = match (cp.last_impact, last) {
+        (Some(i), Some(t)) => i.index.checked_add(1) == Some(cp.stats.impacts) && i.t == t.to_f64(),
+        (None, None) => cp.stats.impacts == 0,
+        _ => false,
+    };
+    if !counted {
+        return Err("the FMU state's last impact does not match its impact count".into());
+    }
+    Ok(())
+}
+
+/// Longest span (time units) between the start of the core's current Taylor step and its current
+/// time in a saved state: its steps are at most 8 time units long (`taylor::MAX_STEP`); the
+/// margin keeps this check independent of that choice while bounding the work below.
+const MAX_SAVED_STEP: f64 = 64.0;
+
+/// Counts what an advance computes, stopping at the first event.
+#[derive(Default)]
+struct Probe {
+    steps: u32,
+    events: u32,
+}
+
+impl Observer for Probe {
+    fn event(&mut self, _: &Event) -> ControlFlow<()> {
+        self.events += 1;
+        ControlFlow::Break(())
+    }
+
+    fn step(&mut self, _: &StepView<'_>) {
+        self.steps += 1;
+    }
+}
+
+/// A saved core state is inside its current Taylor step (as every state the core stops at is):
+/// going on from the saved step start to the saved time needs at most the one step and meets no
+/// event (a state where the core stopped with a Discard may fail that step again). A state whose
+/// time lies beyond its step (e.g. a step start moved far back) would otherwise report an
+/// extrapolated state or integrate across the gap.
+fn check_inside_step(sim: &Simulator) -> Result<(), String> {
+    let cp = sim.checkpoint();
+    let (t0, now) = (cp.t0, sim.instant());
+    let span = Instant::from_parts(t0.0, t0.1).map_or(f64::INFINITY, |t0| now.since(t0));
+    let mut probe = Probe::default();
+    let reached = span <= MAX_SAVED_STEP
+        && match sim.clone().advance_instant(now, &mut probe) {
+            Ok(_) | Err(SimError::Zeno { .. } | SimError::NonFinite { .. }) => true,
+            Err(_) => false,
+        };
+    let inside = reached && probe.steps <= 1 && probe.events == 0;
+    if inside {
+        Ok(())
+    } else {
+        Err(format!(
+            "the FMU state's simulator time is not inside its current step (step start {} before it)",
+            span
+        ))
+    }
+}
+
 /// The parts of a [`Model`] an FMU state keeps (plain numbers).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SavedModel {
@@ -522,7 +790,8 @@ pub struct SavedModel {
 /// that removes the difference `δ = z_now − z_in` between where the plate is and where the
 /// inputs put it. The plate position stays continuous (the core refuses jumps) and reaches the
 /// inputs' extrapolation by the end of the step; `δ` is zero for inputs that extrapolate exactly.
-/// `z_now = None`: the plate starts at `z_in` (initialization).
+/// A step too short for the blend (its coefficients `∝ δ/len³` overflow) carries `δ` over to the
+/// next step. `z_now = None`: the plate starts at `z_in` (initialization).
 fn plate_piece(
     scale: &Scale,
     start: Instant,
@@ -542,10 +811,19 @@ fn plate_piece(
         ));
     }
     let delta = z_now.map_or(0.0, |z| z - c[0]);
-    if delta != 0.0 {
-        c[0] += delta;
-        c[2] -= 3.0 * delta / (len * len);
-        c[3] += 2.0 * delta / (len * len * len);
+    if let Some(z) = z_now.filter(|_| delta != 0.0) {
+        // Exactly where the plate is (`c0 + δ` may round away from it when the inputs are far
+        // from the plate, and the core refuses a plate that jumps).
+        c[0] = z;
+        let (c2, c3) = (
+            c[2] - 3.0 * delta / (len * len),
+            c[3] + 2.0 * delta / (len * len * len),
+        );
+        // A step too short to blend the difference out within doubles (e.g. 1e-200 s) leaves
+        // it to the next step: the plate stays continuous and follows the inputs' derivatives.
+        if c2.is_finite() && c3.is_finite() {
+            (c[2], c[3]) = (c2, c3);
+        }
     }
     if let Some(k) = c.iter().position(|v| !v.is_finite()) {
         return Err(format!(

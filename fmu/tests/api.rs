@@ -659,3 +659,333 @@ fn input_derivatives_set_during_initialization_shape_the_first_step() {
     assert!((run(&[1]) - (0.07 - 0.25)).abs() < 1e-15);
     assert!((run(&[]) - 0.07).abs() < 1e-15);
 }
+
+#[test]
+fn a_step_beyond_the_clock_range_is_refused_at_once() {
+    // Found by the C host's fuzz mode: fmi2DoStep(tc, 1e20) integrated forever.
+    let mut f = Fmu::started(&[]);
+    assert_eq!(f.step(0.5), fmi2OK);
+    let t0 = std::time::Instant::now();
+    for h in [1e20, 1e300, f64::MAX, 4.6e15] {
+        let s = f.step(h);
+        f.assert_refused(s, "clock range");
+    }
+    assert!(t0.elapsed().as_secs_f64() < 1.0);
+    assert_eq!(f.step(0.5), fmi2OK, "the instance is intact");
+    // The range is counted in shaker radians: a fast shaker reaches it sooner.
+    let mut g = Fmu::started(&[(var::Omega, 1e6)]);
+    let s = g.step(1e10);
+    g.assert_refused(s, "clock range");
+    assert_eq!(g.step(1e-3), fmi2OK);
+}
+
+/// The serialized form of a state of `f` (taken now), and the state itself.
+fn state_bytes(f: &Fmu) -> Vec<u8> {
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    let mut size = 0;
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(f.c, &mut state), fmi2OK);
+        assert_eq!(fmi2SerializedFMUstateSize(f.c, state, &mut size), fmi2OK);
+        let mut bytes = vec![0u8; size];
+        let p = bytes.as_mut_ptr().cast::<fmi2Byte>();
+        assert_eq!(fmi2SerializeFMUstate(f.c, state, p, size), fmi2OK);
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut state), fmi2OK);
+        bytes
+    }
+}
+
+#[test]
+fn well_formed_states_with_inconsistent_times_are_refused() {
+    // Found by the C host's fuzz mode with buffers whose checksum was recomputed after one field
+    // was changed: a model time of -1.8e308 s was accepted (every step then refused) and one of
+    // 3.1e8 s made the next small step integrate from the simulator's 43 s to 3.1e8 s (a hang).
+    use bistable_impact::state::Snapshot;
+    let mut f = Fmu::started(&[]);
+    f.run(43.0, 0.5);
+    let good = Snapshot::deserialize(&state_bytes(&f)).unwrap();
+    let mut cases: Vec<(&str, Snapshot)> = Vec::new();
+    for (t, needle) in [
+        (-f64::MAX, "inconsistent"),
+        (3.114e8, "does not match its simulator's time"),
+        (43.0 + 1e-6, "does not match its simulator's time"),
+    ] {
+        let mut s = good.clone();
+        s.model.as_mut().unwrap().time = t;
+        s.last_successful_time = t;
+        cases.push((needle, s));
+    }
+    let mut s = good.clone();
+    s.last_successful_time = 12.0;
+    cases.push(("inconsistent", s));
+    let mut s = good.clone();
+    s.stop_time = Some(20.0);
+    cases.push(("inconsistent", s));
+    let mut s = good.clone();
+    s.terminated = true;
+    cases.push(("terminated = true in state StepComplete", s));
+    let mut g = Fmu::new();
+    for (needle, s) in cases {
+        let bytes = s.serialize();
+        let mut h: fmi2FMUstate = std::ptr::null_mut();
+        let st =
+            unsafe { fmi2DeSerializeFMUstate(g.c, bytes.as_ptr().cast(), bytes.len(), &mut h) };
+        g.assert_refused(st, needle);
+        assert!(h.is_null());
+    }
+    // The untouched state is accepted and continues where `f` is.
+    let bytes = good.serialize();
+    let mut h: fmi2FMUstate = std::ptr::null_mut();
+    unsafe {
+        assert_eq!(
+            fmi2DeSerializeFMUstate(g.c, bytes.as_ptr().cast(), bytes.len(), &mut h),
+            fmi2OK
+        );
+        assert_eq!(fmi2SetFMUstate(g.c, h), fmi2OK);
+    }
+    g.t = 43.0;
+    f.run(44.0, 0.5);
+    g.run(44.0, 0.5);
+    assert_eq!(f.real(var::x), g.real(var::x));
+}
+
+#[test]
+fn a_refused_external_step_leaves_the_outputs_as_they_were() {
+    // A step refused because the input polynomial is not finite (derivative 1e300 m/s^5 with
+    // omega0 = 1e-3 rad/s) after a change of the tunable Omega used to move the phase reference
+    // first: last_impact_phase changed although fmi2DoStep returned fmi2Error.
+    let params = [
+        (var::shaker_mode, 2.0),
+        (var::omega0, 1e-3),
+        (var::zdot_in, 0.07),
+    ];
+    let mut f = Fmu::started(&params);
+    assert_eq!(f.step(5000.0), fmi2OK, "{:?}", f.messages());
+    let outputs = |f: &Fmu| {
+        let reals = [var::x, var::v, var::z, var::zdot, var::last_impact_phase];
+        let r: Vec<u64> = reals.iter().map(|&i| f.real(i).to_bits()).collect();
+        (r, f.int(var::impact_count))
+    };
+    let before = outputs(&f);
+    assert!(before.1 > 10);
+    assert_eq!(f.set(&[(var::Omega, 3.0)]), fmi2OK);
+    let s = unsafe { fmi2SetRealInputDerivatives(f.c, &vr(var::z_in), 1, &5, &1e300) };
+    assert_eq!(s, fmi2OK);
+    let s = f.step(1.0);
+    f.assert_refused(s, "plate polynomial from the inputs is not finite");
+    assert_eq!(outputs(&f), before);
+    // With moderate inputs the same step goes through and the new Omega takes effect.
+    let s = unsafe { fmi2SetRealInputDerivatives(f.c, &vr(var::z_in), 1, &5, &0.0) };
+    assert_eq!(s, fmi2OK);
+    assert_eq!(f.step(1.0), fmi2OK, "{:?}", f.messages());
+}
+
+/// Deserializes `s` into `g`, which must refuse it with a message containing `needle`.
+fn assert_state_refused(g: &Fmu, s: &bistable_impact::state::Snapshot, needle: &str) {
+    let bytes = s.serialize();
+    let mut h: fmi2FMUstate = std::ptr::null_mut();
+    let st = unsafe { fmi2DeSerializeFMUstate(g.c, bytes.as_ptr().cast(), bytes.len(), &mut h) };
+    g.assert_refused(st, needle);
+    assert!(h.is_null());
+}
+
+/// The core checkpoint inside a state that has a model.
+fn cp(s: &mut bistable_impact::state::Snapshot) -> &mut bistable_core::Checkpoint {
+    &mut s.model.as_mut().unwrap().checkpoint
+}
+
+#[test]
+fn well_formed_states_with_inconsistent_simulators_are_refused() {
+    // Found by the C host's fuzz mode (buffers with one field changed and the checksum
+    // recomputed), each accepted before: the restored instance then reported the mass 0.06 m
+    // below the plate (gap u0 = 2e-321 while approaching it), an infinite potential energy (plate
+    // coefficient 7e140), a last impact phase of -1.6e30 (phase origin -7.6e46) or -1.2e210
+    // (phase reference Omega 3.2e227), the mass below the plate after one step (plate Omega
+    // 1.4e82), a last impact 7900 s in the future, an impact count without an impact, outputs of
+    // another parameter set (initialization mode with a running model), or it integrated from a
+    // step start of -2.6e184 (a hang).
+    use bistable_core::PlateRecord;
+    use bistable_impact::state::Snapshot;
+    let mut f = Fmu::started(&[(var::Omega, 0.3), (var::V, 0.05)]);
+    f.run(12.3, 0.7);
+    let good = Snapshot::deserialize(&state_bytes(&f)).unwrap();
+    let g = Fmu::new();
+    let edit = |change: &dyn Fn(&mut Snapshot)| {
+        let mut s = good.clone();
+        change(&mut s);
+        s
+    };
+    let cases: Vec<(&str, Snapshot)> = vec![
+        ("FMU state", edit(&|s| cp(s).t0 = (-2.6e184, 0.0))),
+        (
+            "FMU state",
+            edit(&|s| {
+                let c = cp(s);
+                c.u0 = 2e-321;
+                c.w0 = -c.w0.abs() - 0.2;
+            }),
+        ),
+        (
+            "phase reference",
+            edit(&|s| {
+                let m = s.model.as_mut().unwrap();
+                m.phase_ref.2 = -7.6e46;
+            }),
+        ),
+        (
+            "phase reference",
+            edit(&|s| {
+                let m = s.model.as_mut().unwrap();
+                m.phase_ref.0 = 3.2e227;
+            }),
+        ),
+        (
+            "plate sinusoid",
+            edit(&|s| {
+                if let PlateRecord::Sinusoid { phase0, .. } = &mut cp(s).plate {
+                    *phase0 = -1e300;
+                }
+            }),
+        ),
+        (
+            "plate sinusoid",
+            edit(&|s| {
+                if let PlateRecord::Sinusoid { omega, .. } = &mut cp(s).plate {
+                    *omega = 1.4e82;
+                }
+            }),
+        ),
+        (
+            "last impact",
+            edit(&|s| {
+                let c = cp(s);
+                let i = c.last_impact.as_mut().unwrap();
+                i.t += 7900.0;
+                c.last_impact_t = Some((i.t, 0.0));
+            }),
+        ),
+        (
+            "last impact does not match its impact count",
+            edit(&|s| {
+                cp(s).stats.impacts += 1;
+            }),
+        ),
+        (
+            "last impact does not match its impact count",
+            edit(&|s| {
+                let c = cp(s);
+                c.last_impact = None;
+                c.last_impact_t = None;
+            }),
+        ),
+        (
+            "FMU state",
+            edit(&|s| {
+                let c = cp(s);
+                c.well = match c.well {
+                    bistable_core::Well::One => bistable_core::Well::Two,
+                    bistable_core::Well::Two => bistable_core::Well::One,
+                };
+            }),
+        ),
+        (
+            "a running model in state InitializationMode",
+            edit(&|s| {
+                s.lifecycle = bistable_impact::instance::Lifecycle::InitializationMode;
+            }),
+        ),
+    ];
+    for (needle, s) in &cases {
+        assert_state_refused(&g, s, needle);
+    }
+    // The same in external mode: a plate coefficient that makes the energies infinite.
+    let mut e = Fmu::started(&[(var::shaker_mode, 2.0), (var::zdot_in, 0.07)]);
+    assert_eq!(e.step(0.3), fmi2OK);
+    let mut s = Snapshot::deserialize(&state_bytes(&e)).unwrap();
+    if let PlateRecord::Poly { coeffs, .. } = &mut cp(&mut s).plate {
+        coeffs[5] = 6.9e140;
+    }
+    cp(&mut s).t0 = (0.2, 0.0); // a step start before now: the plate is evaluated inside the piece
+    assert_state_refused(&g, &s, "FMU state");
+    // The untouched states are accepted.
+    for bytes in [good.serialize(), state_bytes(&e)] {
+        let mut h: fmi2FMUstate = std::ptr::null_mut();
+        let st =
+            unsafe { fmi2DeSerializeFMUstate(g.c, bytes.as_ptr().cast(), bytes.len(), &mut h) };
+        assert_eq!(st, fmi2OK, "{:?}", g.messages());
+    }
+}
+
+#[test]
+fn steps_longer_than_the_work_limit_are_refused_and_tiny_ones_accepted() {
+    // A step spanning more than 1e6 shaker radians is refused (it could run for minutes): found
+    // by the fuzz mode as a hang with h = 1e20 s and omega0 = 1e-9 rad/s (1e11 time units).
+    let mut f = Fmu::started(&[]);
+    let s = f.step(1e6);
+    f.assert_refused(s, "split it into shorter steps");
+    let mut slow = Fmu::started(&[(var::omega0, 1e-9)]);
+    let s = slow.step(1e20);
+    slow.assert_refused(s, "split it into shorter steps");
+    assert_eq!(f.step(5e5), fmi2OK, "within the limit");
+    // A step shorter than the core's time resolution (5e-324 s with omega0 < 1, external mode)
+    // was refused ("the step must end after t = 0 s"); it only moves the communication time.
+    let params = [
+        (var::shaker_mode, 2.0),
+        (var::omega0, 0.5),
+        (var::zdot_in, 0.07),
+    ];
+    let mut g = Fmu::started(&params);
+    assert_eq!(g.step(5e-324), fmi2OK, "{:?}", g.messages());
+    assert_eq!(g.step(0.1), fmi2OK, "{:?}", g.messages());
+}
+
+#[test]
+fn inputs_far_from_the_plate_are_blended_without_a_jump() {
+    // z_in = 1e12 m with delta_x = 1e-12 m is 1e24 in core units: the plate polynomial's first
+    // coefficient c0 + (z - c0) rounded away from the plate position z and the core refused the
+    // step as a plate jump. Found by the fuzz mode (22 refusals in seeds 1-60 of 20,000 calls).
+    let params = [
+        (var::shaker_mode, 2.0),
+        (var::delta_x, 1e-12),
+        (var::zdot_in, 1e-13),
+    ];
+    let mut f = Fmu::started(&params);
+    assert_eq!(f.step(1.0), fmi2OK, "{:?}", f.messages());
+    let z0 = f.real(var::z);
+    assert!(z0 > 0.0);
+    assert_eq!(f.set(&[(var::z_in, 1e-3)]), fmi2OK);
+    assert_eq!(f.step(1.0), fmi2OK, "{:?}", f.messages());
+    assert!(f.real(var::z).is_finite() && f.real(var::z) != z0);
+}
+
+#[test]
+fn a_state_driven_far_out_of_scope_ends_in_a_discard_not_a_hang() {
+    // Found by the fuzz mode: delta_x = 1e-12 m and a plate input of -8.9e11 m/s (about 1e24 in
+    // core units) hurl the mass into oscillations whose period shrinks without bound; a step of
+    // 4.4e-4 s ran for hours. The work budget stops it with a Discard within seconds, at a state
+    // whose outputs are finite.
+    let params = [
+        (var::shaker_mode, 2.0),
+        (var::delta_x, 1e-12),
+        (var::omega0, 1.294940925962119),
+        (var::x0, 0.040201883766567977),
+        (var::zdot_in, -889974210997.7913),
+    ];
+    let mut f = Fmu::started(&params);
+    let t0 = std::time::Instant::now();
+    let s = f.step(0.0004424603955001026);
+    assert!(t0.elapsed().as_secs_f64() < 30.0);
+    assert!(s == fmi2Discard || s == fmi2OK, "{s} {:?}", f.messages());
+    if s == fmi2Discard {
+        let msg = f.messages().join("\n");
+        assert!(msg.contains("outside the model's scope"), "{msg}");
+    }
+    for i in [
+        var::x,
+        var::v,
+        var::z,
+        var::kinetic_energy,
+        var::potential_energy,
+    ] {
+        assert!(f.real(i).is_finite(), "{}", VARS[i].name);
+    }
+}
