@@ -451,7 +451,7 @@ fn random_communication_points_change_nothing() {
                 .unwrap_or_else(|err| panic!("{what}: {err}"));
             calls += 1;
             k += 1;
-            if k % 10 == 0 {
+            if k.is_multiple_of(10) {
                 sim = Simulator::from_checkpoint(&sim.checkpoint()).unwrap();
                 restores += 1;
             }
