@@ -310,6 +310,18 @@ impl Model {
             return Err("the FMU state's plate does not match its shaker_mode".into());
         }
         check_checkpoint(cp)?;
+        // The solver settings are the ones this FMU uses for the state's `tol`.
+        let opts =
+            SolverOptions::new(values[var::tol], chatter_rule()).map_err(|e| describe_param(&e))?;
+        let settings = (
+            opts.tol(),
+            opts.order(),
+            opts.chatter(),
+            opts.max_chatter_impacts(),
+        );
+        if (cp.tol, cp.order, cp.chatter, cp.max_chatter_impacts) != settings {
+            return Err("the FMU state's solver settings are not this FMU's".into());
+        }
         let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
         check_inside_step(&sim)?;
         let (omega, v, hi, lo, phase0, offset) = saved.phase_ref;
@@ -710,6 +722,16 @@ fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
         .and_then(|(hi, lo)| Instant::from_parts(hi, lo));
     if last.is_some_and(|last| last > now) {
         return Err("the FMU state's last impact is after its current time".into());
+    }
+    // Counters far beyond any run (2^53 steps take decades) would overflow as the run goes on.
+    let s = cp.stats;
+    let limit = 1u64 << 53;
+    if [s.steps, s.impacts, s.sticks, s.snap_throughs]
+        .iter()
+        .any(|&n| n > limit)
+        || cp.short_flights > cp.max_chatter_impacts
+    {
+        return Err("the FMU state's counters are out of range".into());
     }
     // The last impact is the one counted last, at the recorded instant.
     let counted = match (cp.last_impact, last) {

@@ -897,6 +897,20 @@ fn well_formed_states_with_inconsistent_simulators_are_refused() {
     for (needle, s) in &cases {
         assert_state_refused(&g, s, needle);
     }
+    // Found by the deserialize_state fuzz target (cargo-fuzz, debug assertions on): a step
+    // counter of u64::MAX overflowed in the core's next step (a panic with overflow checks, a
+    // silent wrap without); also the other counters and the solver settings.
+    let counters: [&dyn Fn(&mut Snapshot); 6] = [
+        &|s| cp(s).stats.steps = u64::MAX,
+        &|s| cp(s).stats.impacts = u64::MAX,
+        &|s| cp(s).stats.snap_throughs = u64::MAX,
+        &|s| cp(s).short_flights = u32::MAX,
+        &|s| cp(s).max_chatter_impacts = u32::MAX,
+        &|s| cp(s).order += 2,
+    ];
+    for change in counters {
+        assert_state_refused(&g, &edit(change), "FMU state");
+    }
     // The same in external mode: a plate coefficient that makes the energies infinite.
     let mut e = Fmu::started(&[(var::shaker_mode, 2.0), (var::zdot_in, 0.07)]);
     assert_eq!(e.step(0.3), fmi2OK);
