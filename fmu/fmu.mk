@@ -4,6 +4,9 @@
 #   make fmu-reference  regenerate the co-simulation regression CSVs in tests/fmu/reference/
 #   make fmu-guid       rewrite the guid of modelDescription.xml after editing it
 #   make fmu-bench      cost per fmi2DoStep (C host) and fmpy simulate wall time
+#   make stress-fmu     fault campaign (part of make stress): C host fuzz mode over FUZZ_SEEDS x
+#                       FUZZ_CALLS, valgrind memcheck (host test + VALGRIND_SEEDS x VALGRIND_CALLS),
+#                       cargo-fuzz targets for FUZZ_SECONDS each
 
 FMU_NAME := bistable_impact
 FMU_DIR := target/fmu
@@ -12,11 +15,19 @@ FMU_STAGE := $(FMU_DIR)/stage
 FMU_SO := $(FMU_STAGE)/binaries/linux64/$(FMU_NAME).so
 FMU_HOST := $(FMU_DIR)/host
 VENV_PY := .venv/bin/python
+# Quick fuzz run in test-fmu (under a second) and the long campaign of stress-fmu.
+FMU_FUZZ_QUICK := 1-20 5000
+FUZZ_SEEDS ?= 1-200
+FUZZ_CALLS ?= 20000
+VALGRIND_SEEDS ?= 1-10
+VALGRIND_CALLS ?= 20000
+FUZZ_SECONDS ?= 300
 
-.PHONY: fmu test-fmu fmu-host fmu-reference fmu-guid fmu-bench fmu-demo
+.PHONY: fmu test-fmu fmu-host fmu-reference fmu-guid fmu-bench fmu-demo stress-fmu
 
 TEST_TARGETS += test-fmu
 DEMO_TARGETS += fmu fmu-demo
+STRESS_TARGETS += stress-fmu
 
 fmu:
 	$(CARGO) build --release -p bistable-fmu
@@ -30,15 +41,17 @@ fmu:
 	cd $(FMU_STAGE) && python3 -m zipfile -c ../$(FMU_NAME).fmu modelDescription.xml binaries documentation extra
 	@echo "fmu: $(FMU)"
 
-$(FMU_HOST): tests/fmu_host/host.c fmu/include/$(FMU_NAME).h
+FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/fuzz.c
+$(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h fmu/include/$(FMU_NAME).h
 	mkdir -p $(FMU_DIR)
-	$(CC) -std=gnu11 -O2 -Wall -Wextra -Werror -Ifmu/include $< -o $@ -ldl -lm
+	$(CC) -std=gnu11 -O2 -g -Wall -Wextra -Werror -Ifmu/include $(FMU_HOST_SRC) -o $@ -ldl -lm
 
 fmu-host: $(FMU_HOST)
 
 test-fmu: setup fmu fmu-host
 	$(CARGO) build --release -p bistable-cli
 	$(FMU_HOST) test $(FMU_SO) modelDescription.xml
+	FUZZ_QUIET=1 $(FMU_HOST) fuzz $(FMU_SO) modelDescription.xml $(FMU_FUZZ_QUICK)
 	.venv/bin/fmpy validate $(FMU)
 	$(VENV_PY) -m pytest -q tests/fmu
 
@@ -57,3 +70,11 @@ fmu-demo: setup fmu
 	.venv/bin/fmpy validate $(FMU)
 	.venv/bin/fmpy simulate $(FMU) --output-interval 0.01 --output-file $(OUT)/fmu_baseline.csv
 	@echo "fmu-demo: $(OUT)/fmu_baseline.csv (paper baseline through the FMU, default experiment)"
+
+## The FMU part of the stress and fault campaign (docs/reliability.md): random FMI call sequences
+## with invariants (tests/fmu_host/fuzz.c), valgrind memcheck, coverage-guided fuzzing (fmu/fuzz).
+stress-fmu: setup fmu fmu-host
+	FUZZ_QUIET=1 $(FMU_HOST) fuzz $(FMU_SO) modelDescription.xml $(FUZZ_SEEDS) $(FUZZ_CALLS)
+	bash fmu/valgrind.sh $(FMU_HOST) target/release/lib$(FMU_NAME).so $(VALGRIND_SEEDS) $(VALGRIND_CALLS)
+	bash fmu/fuzz/run.sh $(FUZZ_SECONDS)
+	@echo "stress-fmu: passed"

@@ -4,40 +4,16 @@
  *   host test  LIB.so modelDescription.xml   scenarios + scripted illegal calls; prints
  *                                            "N passed, M failed" and exits 1 on any failure
  *   host bench LIB.so modelDescription.xml   cost per fmi2DoStep, h = 0.01 vs one big step
+ *   host fuzz  LIB.so modelDescription.xml SEEDS NCALLS
+ *                                            random FMI call sequences with invariants (fuzz.c)
  *
  * Value references are looked up by name in modelDescription.xml (the single source of truth).
  */
-#define _GNU_SOURCE
-#include <dlfcn.h>
-#include <math.h>
-#include <stdarg.h>
-#include <stdio.h>
-#include <stdlib.h>
-#include <string.h>
-#include <time.h>
+#include "host.h"
 
-#include "bistable_impact.h"
+struct fmi_table F;
 
-/* ---- the FMU's functions, typed by the header's prototypes ---- */
-#define FMI_FUNCTIONS(X)                                                                      \
-    X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2Instantiate)      \
-    X(fmi2FreeInstance) X(fmi2SetupExperiment) X(fmi2EnterInitializationMode)                \
-    X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset) X(fmi2GetReal)               \
-    X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger)    \
-    X(fmi2SetBoolean) X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2SetFMUstate)                 \
-    X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize) X(fmi2SerializeFMUstate)               \
-    X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative)                               \
-    X(fmi2SetRealInputDerivatives) X(fmi2GetRealOutputDerivatives) X(fmi2DoStep)             \
-    X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus) X(fmi2GetIntegerStatus)          \
-    X(fmi2GetBooleanStatus) X(fmi2GetStringStatus)
-
-static struct {
-#define FIELD(f) __typeof__(&f) f;
-    FMI_FUNCTIONS(FIELD)
-#undef FIELD
-} F;
-
-static int load(const char *path) {
+int load(const char *path) {
     void *lib = dlopen(path, RTLD_NOW | RTLD_LOCAL);
     if (!lib) {
         fprintf(stderr, "dlopen %s: %s\n", path, dlerror());
@@ -58,7 +34,7 @@ static int load(const char *path) {
 }
 
 /* ---- model description: guid and value references by name ---- */
-static char *xml;
+char *xml;
 
 static char *read_file(const char *path) {
     FILE *f = fopen(path, "rb");
@@ -74,7 +50,7 @@ static char *read_file(const char *path) {
 }
 
 /* The value reference of the variable `name` (exits if absent). */
-static fmi2ValueReference vr(const char *name) {
+fmi2ValueReference vr(const char *name) {
     char key[128];
     snprintf(key, sizeof key, "name=\"%s\"", name);
     const char *p = strstr(xml, key);
@@ -86,7 +62,7 @@ static fmi2ValueReference vr(const char *name) {
     return (fmi2ValueReference)strtoul(q + strlen("valueReference=\""), NULL, 10);
 }
 
-static char guid[64];
+char guid[64];
 
 static void read_guid(void) {
     const char *p = strstr(xml, "guid=\"");
@@ -403,7 +379,7 @@ static void illegal_calls(void) {
     F.fmi2FreeInstance(c);
 }
 
-static double now(void) {
+double now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
@@ -438,8 +414,12 @@ static void bench(void) {
 }
 
 int main(int argc, char **argv) {
-    if (argc != 4 || (strcmp(argv[1], "test") != 0 && strcmp(argv[1], "bench") != 0)) {
-        fprintf(stderr, "usage: %s test|bench LIB.so modelDescription.xml\n", argv[0]);
+    int fuzz = argc == 6 && strcmp(argv[1], "fuzz") == 0;
+    if (!fuzz && (argc != 4 || (strcmp(argv[1], "test") != 0 && strcmp(argv[1], "bench") != 0))) {
+        fprintf(stderr,
+                "usage: %s test|bench LIB.so modelDescription.xml\n"
+                "       %s fuzz LIB.so modelDescription.xml SEEDS NCALLS   (SEEDS: N or FIRST-LAST)\n",
+                argv[0], argv[0]);
         return 2;
     }
     xml = read_file(argv[3]);
@@ -449,8 +429,14 @@ int main(int argc, char **argv) {
     }
     read_guid();
     if (load(argv[2]) != 0) return 1;
+    if (fuzz) {
+        int rc = fuzz_main(argv[4], argv[5]);
+        free(xml);
+        return rc;
+    }
     if (strcmp(argv[1], "bench") == 0) {
         bench();
+        free(xml);
         return 0;
     }
     check(strcmp(F.fmi2GetVersion(), "2.0") == 0, "fmi2GetVersion is 2.0");
@@ -461,5 +447,6 @@ int main(int argc, char **argv) {
     logging_of_events();
     illegal_calls();
     printf("%d passed, %d failed\n", passed, failed);
+    free(xml);
     return failed ? 1 : 0;
 }

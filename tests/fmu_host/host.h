@@ -1,0 +1,51 @@
+/* Shared by the C host's modes (host.c: test, bench; fuzz.c: fuzz): the FMU's functions loaded
+ * with dlopen and typed by the cbindgen header's prototypes, the model description text and its
+ * guid, value references by name. */
+#ifndef BISTABLE_FMU_HOST_H
+#define BISTABLE_FMU_HOST_H
+
+#define _GNU_SOURCE
+#include <dlfcn.h>
+#include <math.h>
+#include <stdarg.h>
+#include <stdio.h>
+#include <stdlib.h>
+#include <string.h>
+#include <time.h>
+
+#include "bistable_impact.h"
+
+#define FMI_FUNCTIONS(X)                                                                      \
+    X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2Instantiate)      \
+    X(fmi2FreeInstance) X(fmi2SetupExperiment) X(fmi2EnterInitializationMode)                \
+    X(fmi2ExitInitializationMode) X(fmi2Terminate) X(fmi2Reset) X(fmi2GetReal)               \
+    X(fmi2GetInteger) X(fmi2GetBoolean) X(fmi2GetString) X(fmi2SetReal) X(fmi2SetInteger)    \
+    X(fmi2SetBoolean) X(fmi2SetString) X(fmi2GetFMUstate) X(fmi2SetFMUstate)                 \
+    X(fmi2FreeFMUstate) X(fmi2SerializedFMUstateSize) X(fmi2SerializeFMUstate)               \
+    X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative)                               \
+    X(fmi2SetRealInputDerivatives) X(fmi2GetRealOutputDerivatives) X(fmi2DoStep)             \
+    X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus) X(fmi2GetIntegerStatus)          \
+    X(fmi2GetBooleanStatus) X(fmi2GetStringStatus)
+
+struct fmi_table {
+#define FIELD(f) __typeof__(&f) f;
+    FMI_FUNCTIONS(FIELD)
+#undef FIELD
+};
+
+/* The loaded functions (host.c). */
+extern struct fmi_table F;
+/* Loads every fmi2 function from the library at `path`; 0 on success. */
+int load(const char *path);
+/* modelDescription.xml as text, and its guid. */
+extern char *xml;
+extern char guid[64];
+/* The value reference of the variable `name` (exits if absent). */
+fmi2ValueReference vr(const char *name);
+/* Monotonic wall time (s). */
+double now(void);
+
+/* `host fuzz` (fuzz.c): arguments after the mode and the two paths. */
+int fuzz_main(const char *seeds, const char *ncalls);
+
+#endif
