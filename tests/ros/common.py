@@ -1,11 +1,15 @@
 """Helpers of the ROS 2 interop tests: the node as a subprocess, the core's reference impact
 list, and spinning an rclpy node until a condition holds."""
 import csv
+import ctypes
 import io
 import os
 import pathlib
+import re
 import signal
 import subprocess
+import threading
+import time
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 NODE = os.environ.get("BISTABLE_NODE", str(ROOT / "target/release/bistable_impact_node"))
@@ -14,26 +18,81 @@ PARAMS_FILE = ROOT / "ros/bistable_impact_node/config/bistable_impact.yaml"
 IMPACT_FIELDS = ["t", "phase", "x", "v_before", "v_after", "zdot", "delta_k"]
 
 
-class NodeProcess:
-    """bistable_impact_node with ROS arguments, in DDS domain `domain`; stderr is collected."""
+_prctl = ctypes.CDLL(None, use_errno=True).prctl
 
-    def __init__(self, *ros_args, domain=0):
+
+def _die_with_parent():
+    """In the child before exec: SIGKILL when the test process dies (no orphaned nodes)."""
+    _prctl(1, signal.SIGKILL)  # PR_SET_PDEATHSIG
+
+
+class NodeProcess:
+    """bistable_impact_node with ROS arguments, in DDS domain `domain`. Its stderr is read as it
+    comes (a full pipe would block the node's logging), keeping at most `keep_lines` lines:
+    the first half and the most recent half."""
+
+    def __init__(self, *ros_args, domain=0, keep_lines=20000):
         env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
-        self.proc = subprocess.Popen([NODE, "--ros-args", *ros_args], stderr=subprocess.PIPE, text=True, env=env)
+        self.proc = subprocess.Popen([NODE, "--ros-args", *ros_args], stderr=subprocess.PIPE, text=True, env=env,
+                                     preexec_fn=_die_with_parent)
         self.log = None
+        self.lines_seen = 0
+        self._head, self._tail = [], []
+        self._keep = keep_lines // 2
+        self._reader = threading.Thread(target=self._read, daemon=True)
+        self._reader.start()
+
+    def _read(self):
+        for line in self.proc.stderr:
+            self.lines_seen += 1
+            if len(self._head) < self._keep:
+                self._head.append(line)
+            else:
+                self._tail.append(line)
+                if len(self._tail) > 2 * self._keep:
+                    del self._tail[:self._keep]
 
     @property
     def pid(self):
         return self.proc.pid
+
+    def alive(self):
+        return self.proc.poll() is None
 
     def stop(self):
         """Stops the node with SIGINT (as ros2 launch does) and returns its log; the node must
         exit by itself with status 0."""
         if self.log is None:
             self.proc.send_signal(signal.SIGINT)
-            _, self.log = self.proc.communicate(timeout=30)
+            try:
+                self.proc.wait(timeout=30)
+            finally:
+                if self.proc.poll() is None:
+                    self.proc.kill()
+                self._reader.join(timeout=10)
+            tail = self._tail[-self._keep:] if len(self._tail) > self._keep else self._tail
+            skipped = self.lines_seen - len(self._head) - len(tail)
+            self.log = "".join(self._head + ([f"[... {skipped} lines ...]\n"] if skipped else []) + tail)
             assert self.proc.returncode == 0, self.log
         return self.log
+
+
+SUMMARY = re.compile(r"stopping at t = (?P<t>\S+) s: (?P<located>\d+) impacts located, (?P<published>\d+) published "
+                     r"\((?P<failed>\d+) failed\), (?P<states>\d+) states published \((?P<dropped>\d+) dropped\), "
+                     r"(?P<accepted>\d+) commands accepted, (?P<refused>\d+) refused, (?P<dropped_when_due>\d+) dropped when due")
+
+
+def summary(log):
+    """The node's shutdown summary as numbers (t in s, counts as ints)."""
+    m = SUMMARY.search(log)
+    assert m, log[-3000:]
+    return {k: (float(v) if k == "t" else int(v)) for k, v in m.groupdict().items()}
+
+
+def rss_kib(pid, field="VmRSS"):
+    """Resident set size (VmRSS) or its peak (VmHWM) of process `pid` [KiB]."""
+    with open(f"/proc/{pid}/status") as f:
+        return int(re.search(rf"^{field}:\s+(\d+) kB", f.read(), re.M).group(1))
 
 
 def reference(omega, v, t_end, switch=None):
@@ -53,3 +112,39 @@ def assert_impacts_match(received, ref, tol=1e-12):
             got, want = getattr(m, f), r[f]
             assert abs(got - want) <= tol, f"impact {m.index} {f}: {got} vs {want}"
         assert m.ended_in_sticking == bool(r["ended_in_sticking"])
+
+
+class Spinner:
+    """An rclpy context, node and executor of one test peer in DDS domain `domain`."""
+
+    def __init__(self, domain, name="fault_peer"):
+        import rclpy
+        from rclpy.executors import SingleThreadedExecutor
+        from rclpy.node import Node
+
+        self.rclpy = rclpy
+        self.context = rclpy.Context()
+        rclpy.init(context=self.context, domain_id=domain)
+        self.node = Node(name, context=self.context)
+        self.executor = SingleThreadedExecutor(context=self.context)
+        self.executor.add_node(self.node)
+
+    def spin_until(self, cond, timeout, step=0.02):
+        """Spins until `cond()` holds or `timeout` seconds passed; returns `cond()`."""
+        end = time.monotonic() + timeout
+        while not cond() and time.monotonic() < end:
+            self.executor.spin_once(timeout_sec=step)
+        return cond()
+
+    def spin_for(self, seconds, step=0.02):
+        self.spin_until(lambda: False, seconds, step)
+
+    def drain(self, n=10):
+        """Runs up to `n` callbacks that are ready now, without waiting."""
+        for _ in range(n):
+            self.executor.spin_once(timeout_sec=0)
+
+    def close(self):
+        self.executor.shutdown(timeout_sec=1)
+        self.node.destroy_node()
+        self.rclpy.shutdown(context=self.context)

@@ -3,6 +3,7 @@
 //! shaker commands, and serves its parameters. See `ros/README.md`.
 
 pub mod args;
+pub mod inbox;
 pub mod msg;
 pub mod params;
 pub mod sim;

@@ -8,6 +8,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use bistable_impact_node::args::{self, Config, Parsed};
+use bistable_impact_node::inbox::{take_commands, Taken, Throttle, MAX_COMMANDS_PER_CALL};
 use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, ShakerCommand};
 use bistable_impact_node::params::{Settings, SPECS};
 use bistable_impact_node::sim::{Outcome, Runner};
@@ -16,7 +17,7 @@ use ros2_client::qos::{Durability, History, Reliability, WhenFull};
 use ros2_client::rosout::{NodeLoggingHandle, RosoutRaw};
 use ros2_client::{
     Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue,
-    Publisher, QosProfile, WriteError,
+    Publisher, QosProfile, Subscription, WriteError,
 };
 
 /// QoS of `/bistable/mass_state` and `/clock`: reliable (matches reliable and best-effort
@@ -51,7 +52,7 @@ const COMMAND_QOS: QosProfile = QosProfile::subscription_default()
     .reliability(Reliability::Reliable {
         when_full: WhenFull::DEFAULT,
     })
-    .history(History::KeepLast { depth: 100 });
+    .history(History::KeepLast { depth: 1000 });
 
 /// A parameter event from the parameter services (spinner thread) to the simulation loop.
 enum ParamEvent {
@@ -127,24 +128,120 @@ impl Pacer {
         }
     }
 
-    /// Sleeps until simulation time `t` [s] is due (returns at once when `rtf` is 0, or when
-    /// more than a second behind: then the schedule restarts from now).
-    fn wait(&mut self, t: f64, stop: &AtomicBool) {
+    /// The wall-clock instant at which simulation time `t` [s] is due; `None` when `rtf` is 0
+    /// (as fast as possible) or when more than a second behind (then the schedule restarts
+    /// from now).
+    fn due(&mut self, t: f64) -> Option<Instant> {
         if self.rtf <= 0.0 {
-            return;
+            return None;
         }
         let due = (t - self.sim) / self.rtf;
         let elapsed = self.wall.elapsed().as_secs_f64();
         if elapsed > due + 1.0 || !due.is_finite() {
             *self = Self::new(self.rtf, t);
-            return;
+            return None;
         }
-        while !stop.load(Ordering::Relaxed) {
-            let left = due - self.wall.elapsed().as_secs_f64();
-            if left <= 0.0 {
-                break;
+        Some(self.wall + Duration::from_secs_f64(due.max(0.0)))
+    }
+}
+
+/// How often the loop looks for commands and parameter changes while it waits for wall time.
+const POLL: Duration = Duration::from_millis(1);
+/// Per-command log lines (accepted, refused, applied) let through per second; the others are
+/// counted and summarised once a second (the totals are in the shutdown summary).
+const COMMAND_LOG_BUDGET: u32 = 50;
+
+/// What the simulation loop changes as commands and parameters arrive.
+struct LoopState {
+    runner: Runner,
+    settings: Settings,
+    pacer: Pacer,
+    n: Counters,
+}
+
+/// What the simulation loop reads between steps: shaker commands and parameter events.
+struct Inbox<'a> {
+    commands: &'a Subscription<ShakerCommand>,
+    params: mpsc::Receiver<ParamEvent>,
+    throttle: Throttle,
+}
+
+impl Inbox<'_> {
+    /// Takes the waiting commands and parameter events and applies them; returns whether the
+    /// pacing changed (a parameter restarted the schedule).
+    fn serve(&mut self, st: &mut LoopState, log: &Logger) -> bool {
+        let LoopState {
+            runner,
+            settings,
+            pacer,
+            n,
+        } = st;
+        let throttle = &mut self.throttle;
+        let commands = self.commands;
+        take_commands(
+            || commands.take().map(|s| s.map(|(cmd, _)| cmd)),
+            runner,
+            MAX_COMMANDS_PER_CALL,
+            |taken| {
+                let (level, msg) = match taken {
+                    Taken::Accepted(what) => {
+                        n.commands += 1;
+                        (LogLevel::Info, format!("accepted command: {what}"))
+                    }
+                    Taken::Refused(why) => {
+                        n.commands_refused += 1;
+                        (LogLevel::Warn, format!("refused shaker command: {why}"))
+                    }
+                };
+                if throttle.allow(Instant::now()) {
+                    log.log(level, &msg);
+                }
+            },
+        );
+        for note in runner.take_notes() {
+            if self.throttle.allow(Instant::now()) {
+                log.log(LogLevel::Info, &note);
             }
-            std::thread::sleep(Duration::from_secs_f64(left.min(0.05)));
+        }
+        if let Some((k, window)) = self.throttle.flush(Instant::now()) {
+            log.log(
+                LogLevel::Warn,
+                &format!(
+                    "{k} more shaker command messages in the last {:.1} s not logged (at most \
+                     {COMMAND_LOG_BUDGET} a second; so far {} commands accepted, {} refused)",
+                    window.as_secs_f64(),
+                    n.commands,
+                    n.commands_refused
+                ),
+            );
+        }
+        let mut repaced = false;
+        while let Ok(ev) = self.params.try_recv() {
+            match ev {
+                ParamEvent::Set(name, value) => {
+                    repaced |= name == "real_time_factor";
+                    apply_parameter(settings, runner, pacer, &name, &value, log)
+                }
+                ParamEvent::Refused(name, why) => {
+                    log.log(LogLevel::Warn, &format!("refused parameter {name}: {why}"))
+                }
+            }
+        }
+        repaced
+    }
+
+    /// Serves commands and parameters until wall-clock instant `until` (or a stop request,
+    /// or a change of pacing).
+    fn wait_until(&mut self, until: Instant, stop: &AtomicBool, st: &mut LoopState, log: &Logger) {
+        while !stop.load(Ordering::Relaxed) {
+            if self.serve(st, log) {
+                return;
+            }
+            let now = Instant::now();
+            if now >= until {
+                return;
+            }
+            std::thread::sleep((until - now).min(POLL));
         }
     }
 }
@@ -196,7 +293,7 @@ fn run(cfg: Config) -> Result<(), String> {
         ctrlc::set_handler(move || stop.store(true, Ordering::SeqCst))
             .map_err(|e| format!("cannot install the signal handler: {e}"))?;
     }
-    let mut runner = Runner::new(&cfg.settings)?;
+    let runner = Runner::new(&cfg.settings)?;
     let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
         .map_err(|e| format!("cannot join DDS domain {}: {e}", cfg.domain_id))?;
     let node_name = NodeName::new(&cfg.namespace, &cfg.node_name)
@@ -315,70 +412,53 @@ fn run(cfg: Config) -> Result<(), String> {
         log.log(LogLevel::Warn, w);
     }
 
-    let mut settings = cfg.settings.clone();
-    let mut n = Counters::default();
+    let mut st = LoopState {
+        pacer: Pacer::new(cfg.settings.real_time_factor, 0.0),
+        settings: cfg.settings.clone(),
+        runner,
+        n: Counters::default(),
+    };
     let mut impacts: VecDeque<ImpactEvent> = VecDeque::new();
     let mut fresh = Vec::new();
-    let mut pacer = Pacer::new(settings.real_time_factor, 0.0);
+    let mut inbox = Inbox {
+        commands: &command_sub,
+        params: param_rx,
+        throttle: Throttle::new(COMMAND_LOG_BUDGET, Duration::from_secs(1), Instant::now()),
+    };
     let mut last_outcome = Outcome::Tick;
-    publish_tick(&runner, &state_pub, &clock_pub, &mut n, &log);
+    publish_tick(&st.runner, &state_pub, &clock_pub, &mut st.n, &log);
     while !stop.load(Ordering::Relaxed) {
-        for _ in 0..1000 {
-            match command_sub.take() {
-                Ok(Some((cmd, _))) => match runner.command(&cmd) {
-                    Ok(what) => {
-                        n.commands += 1;
-                        log.log(LogLevel::Info, &format!("accepted command: {what}"));
-                    }
-                    Err(why) => {
-                        n.commands_refused += 1;
-                        log.log(LogLevel::Warn, &format!("refused shaker command: {why}"));
-                    }
-                },
-                Ok(None) => break,
-                Err(e) => {
-                    n.commands_refused += 1;
-                    log.log(LogLevel::Warn, &format!("refused shaker command: {e}"));
-                    break;
-                }
-            }
-        }
-        while let Ok(ev) = param_rx.try_recv() {
-            match ev {
-                ParamEvent::Set(name, value) => {
-                    apply_parameter(&mut settings, &mut runner, &mut pacer, &name, &value, &log)
-                }
-                ParamEvent::Refused(name, why) => {
-                    log.log(LogLevel::Warn, &format!("refused parameter {name}: {why}"))
-                }
-            }
-        }
-        for note in runner.take_notes() {
-            log.log(LogLevel::Info, &note);
-        }
-        publish_impacts(&impact_pub, &mut impacts, &mut n, &log);
+        inbox.serve(&mut st, &log);
+        publish_impacts(&impact_pub, &mut impacts, &mut st.n, &log);
         if !impacts.is_empty() {
             // A reliable subscriber is behind: wait for it rather than lose an impact.
-            std::thread::sleep(Duration::from_millis(1));
-            pacer = Pacer::new(settings.real_time_factor, runner.now());
+            inbox.wait_until(
+                Instant::now() + Duration::from_millis(1),
+                &stop,
+                &mut st,
+                &log,
+            );
+            st.pacer = Pacer::new(st.settings.real_time_factor, st.runner.now());
             continue;
         }
-        let outcome = runner.advance(&mut fresh);
+        let outcome = st.runner.advance(&mut fresh);
         impacts.extend(fresh.drain(..));
-        publish_impacts(&impact_pub, &mut impacts, &mut n, &log);
+        publish_impacts(&impact_pub, &mut impacts, &mut st.n, &log);
         match outcome {
             Outcome::Tick => {
-                publish_tick(&runner, &state_pub, &clock_pub, &mut n, &log);
-                pacer.wait(runner.now(), &stop);
+                publish_tick(&st.runner, &state_pub, &clock_pub, &mut st.n, &log);
+                if let Some(due) = st.pacer.due(st.runner.now()) {
+                    inbox.wait_until(due, &stop, &mut st, &log);
+                }
             }
             Outcome::Command => {}
             Outcome::Blocked | Outcome::Halted => {
                 if outcome != last_outcome {
-                    let msg = match runner.halted() {
+                    let msg = match st.runner.halted() {
                         Some(why) => why.to_owned(),
                         None => format!(
                             "waiting at t = {} s for the next external plate sample",
-                            runner.now()
+                            st.runner.now()
                         ),
                     };
                     let level = if outcome == Outcome::Halted {
@@ -388,17 +468,23 @@ fn run(cfg: Config) -> Result<(), String> {
                     };
                     log.log(level, &msg);
                 }
-                std::thread::sleep(Duration::from_millis(2));
-                pacer = Pacer::new(settings.real_time_factor, runner.now());
+                inbox.wait_until(
+                    Instant::now() + Duration::from_millis(2),
+                    &stop,
+                    &mut st,
+                    &log,
+                );
+                st.pacer = Pacer::new(st.settings.real_time_factor, st.runner.now());
             }
         }
         last_outcome = outcome;
     }
+    let LoopState { runner, n, .. } = st;
     log.log(
         LogLevel::Info,
         &format!(
             "stopping at t = {} s: {} impacts located, {} published ({} failed), {} states \
-             published ({} dropped), {} commands accepted, {} refused",
+             published ({} dropped), {} commands accepted, {} refused, {} dropped when due",
             runner.now(),
             runner.impact_count(),
             n.impacts,
@@ -406,7 +492,8 @@ fn run(cfg: Config) -> Result<(), String> {
             n.states,
             n.states_dropped,
             n.commands,
-            n.commands_refused
+            n.commands_refused,
+            runner.commands_dropped()
         ),
     );
     node.stop_spinner();

@@ -18,6 +18,7 @@ use bistable_core::{
     Simulator, Sinusoid, SolverOptions,
 };
 
+use crate::inbox::num;
 use crate::msg::{Header, ImpactEvent, MassState, ShakerCommand, Time};
 use crate::params::Settings;
 
@@ -89,6 +90,8 @@ pub struct Runner {
     events: Vec<Event>,
     notes: Vec<String>,
     halted: Option<String>,
+    /// Accepted commands the core could not apply when they became due.
+    dropped: u64,
 }
 
 impl Runner {
@@ -118,6 +121,7 @@ impl Runner {
             events: Vec::new(),
             notes: Vec::new(),
             halted: None,
+            dropped: 0,
         })
     }
 
@@ -129,6 +133,12 @@ impl Runner {
     /// Impacts located so far.
     pub fn impact_count(&self) -> u64 {
         self.sim.stats().impacts
+    }
+
+    /// Accepted commands dropped when they became due, because the core could not continue
+    /// the plate motion with them (logged as notes).
+    pub fn commands_dropped(&self) -> u64 {
+        self.dropped
     }
 
     /// The error that stopped the simulation, if any.
@@ -184,7 +194,7 @@ impl Runner {
             ("zdot", cmd.zdot),
         ] {
             if !value.is_finite() {
-                return Err(format!("{name} = {value} is not finite"));
+                return Err(format!("{name} = {} is not finite", num(value)));
             }
         }
         if self.queue.len() >= MAX_QUEUED_COMMANDS {
@@ -200,13 +210,22 @@ impl Runner {
                 if !(cmd.omega > 0.0 && omega > 0.0 && omega <= MAX_NONDIMENSIONAL) {
                     return Err(format!(
                         "omega = {} rad/s must be > 0 and at most {MAX_NONDIMENSIONAL:e}·omega0",
-                        cmd.omega
+                        num(cmd.omega)
                     ));
                 }
                 if !(cmd.velocity >= 0.0 && v <= MAX_NONDIMENSIONAL) {
                     return Err(format!(
                         "velocity = {} m/s must be >= 0 and at most {MAX_NONDIMENSIONAL:e}·omega0·delta_x",
-                        cmd.velocity
+                        num(cmd.velocity)
+                    ));
+                }
+                // The plate's displacement amplitude V/Ω (an overflow for a tiny Ω) must be in
+                // range too, or the plate position could not be continued.
+                if v / omega > MAX_NONDIMENSIONAL {
+                    return Err(format!(
+                        "velocity/omega = {} m (the plate's displacement amplitude) must be at \
+                         most {MAX_NONDIMENSIONAL:e}·delta_x",
+                        num(cmd.velocity / cmd.omega)
                     ));
                 }
                 // After external motion the sinusoid takes over where the samples end, so that
@@ -225,7 +244,8 @@ impl Runner {
                     return Err(format!(
                         "z = {} m or zdot = {} m/s is out of range (at most {MAX_NONDIMENSIONAL:e} \
                          delta_x and omega0·delta_x)",
-                        cmd.z, cmd.zdot
+                        num(cmd.z),
+                        num(cmd.zdot)
                     ));
                 }
                 let end = if stamp.is_zero() {
@@ -256,11 +276,13 @@ impl Runner {
         Ok(match item {
             Scheduled::Sinusoid { at, .. } => format!(
                 "shaker sinusoid omega = {} rad/s, velocity = {} m/s from t = {at} s",
-                cmd.omega, cmd.velocity
+                num(cmd.omega),
+                num(cmd.velocity)
             ),
             Scheduled::Sample { start, end, .. } => format!(
                 "external plate sample z = {} m, zdot = {} m/s at t = {end} s (from t = {start} s)",
-                cmd.z, cmd.zdot
+                num(cmd.z),
+                num(cmd.zdot)
             ),
         })
     }
@@ -304,9 +326,11 @@ impl Runner {
                     self.halted = None;
                     self.notes.push(note);
                 }
-                Err(e) => self
-                    .notes
-                    .push(format!("shaker command dropped at t = {t} s: {e}")),
+                Err(e) => {
+                    self.dropped += 1;
+                    self.notes
+                        .push(format!("shaker command dropped at t = {t} s: {e}"));
+                }
             }
         }
     }

@@ -247,6 +247,10 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
         (cmd(0, 0.0, 0.0, 0.1, 0.0, 0.0), "omega"),
         (cmd(0, 0.0, -1.0, 0.1, 0.0, 0.0), "omega"),
         (cmd(0, 0.0, 1e300, 0.1, 0.0, 0.0), "omega"),
+        // An in-range Ω and V whose displacement amplitude V/Ω overflows (the core could not
+        // continue the plate position with it when it became due).
+        (cmd(0, 0.0, 5e-324, 0.07, 0.0, 0.0), "displacement amplitude"),
+        (cmd(0, 0.0, 1e-3, 2e3, 0.0, 0.0), "displacement amplitude"),
         (cmd(0, 0.0, 1.0, 0.1, f64::NEG_INFINITY, 0.0), "z = -inf"),
         (cmd(1, 0.0, 0.0, 0.0, 0.0, nan), "zdot"),
         (cmd(1, 0.0, 0.0, 0.0, 1e9, 0.0), "out of range"),
