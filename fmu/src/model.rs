@@ -323,7 +323,6 @@ impl Model {
             return Err("the FMU state's solver settings are not this FMU's".into());
         }
         let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
-        check_inside_step(&sim)?;
         let (omega, v, hi, lo, phase0, offset) = saved.phase_ref;
         let origin = Instant::from_parts(hi, lo).ok_or("invalid phase origin in the FMU state")?;
         if !(phase0.abs() <= std::f64::consts::PI && origin_in_range(omega, origin, sim.instant()))
@@ -343,7 +342,11 @@ impl Model {
             offset,
         };
         let internal_plate_ok = external || cp.plate == ref_record;
-        if (omega, v) != saved.applied || !internal_plate_ok {
+        // `(Ω, V)` in force were values of the parameters, so within their ranges.
+        let in_range =
+            |i: usize, x: f64| (crate::md::VARS[i].min..=crate::md::VARS[i].max).contains(&x);
+        let applied_ok = in_range(var::Omega, omega) && in_range(var::V, v);
+        if (omega, v) != saved.applied || !internal_plate_ok || !applied_ok {
             return Err(
                 "the FMU state's phase reference does not match its shaker or plate".into(),
             );
@@ -366,6 +369,7 @@ impl Model {
                 scale.time(tau)
             ));
         }
+        check_inside_step(&sim, if external { 1.0 } else { omega })?;
         let mut model = Self {
             sim,
             scale,
@@ -745,9 +749,10 @@ fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
     Ok(())
 }
 
-/// Longest span (time units) between the start of the core's current Taylor step and its current
-/// time in a saved state: its steps are at most 8 time units long (`taylor::MAX_STEP`); the
-/// margin keeps this check independent of that choice while bounding the work below.
+/// Longest span `max(Ω, 1)·(τ − τ_step start)` between the start of the core's current Taylor step
+/// and its current time in a saved state: its steps are at most 8 time units long
+/// (`taylor::MAX_STEP`) and cover about 2 radians of a sinusoidal plate; the margin keeps this
+/// check independent of those choices while bounding the work below.
 const MAX_SAVED_STEP: f64 = 64.0;
 
 /// Counts what an advance computes, stopping at the first event.
@@ -773,12 +778,12 @@ impl Observer for Probe {
 /// event (a state where the core stopped with a Discard may fail that step again). A state whose
 /// time lies beyond its step (e.g. a step start moved far back) would otherwise report an
 /// extrapolated state or integrate across the gap.
-fn check_inside_step(sim: &Simulator) -> Result<(), String> {
+fn check_inside_step(sim: &Simulator, omega: f64) -> Result<(), String> {
     let cp = sim.checkpoint();
     let (t0, now) = (cp.t0, sim.instant());
     let span = Instant::from_parts(t0.0, t0.1).map_or(f64::INFINITY, |t0| now.since(t0));
     let mut probe = Probe::default();
-    let reached = span <= MAX_SAVED_STEP
+    let reached = span * omega.max(1.0) <= MAX_SAVED_STEP
         && match sim.clone().advance_instant(now, &mut probe) {
             Ok(_) | Err(SimError::Zeno { .. } | SimError::NonFinite { .. }) => true,
             Err(_) => false,

@@ -911,6 +911,17 @@ fn well_formed_states_with_inconsistent_simulators_are_refused() {
     for change in counters {
         assert_state_refused(&g, &edit(change), "FMU state");
     }
+    // Found by the deserialize_state fuzz target as a timeout: with the plate's Omega changed to
+    // 8.4e13 the check that the core's time lies inside its step integrated ~1e15 radians of
+    // plate motion before the cheaper checks ran. Refused at once now.
+    let t0 = std::time::Instant::now();
+    let fast_plate = edit(&|s| {
+        if let PlateRecord::Sinusoid { omega, .. } = &mut cp(s).plate {
+            *omega = 84442493013196.8;
+        }
+    });
+    assert_state_refused(&g, &fast_plate, "FMU state");
+    assert!(t0.elapsed().as_secs_f64() < 1.0);
     // The same in external mode: a plate coefficient that makes the energies infinite.
     let mut e = Fmu::started(&[(var::shaker_mode, 2.0), (var::zdot_in, 0.07)]);
     assert_eq!(e.step(0.3), fmi2OK);

@@ -9,9 +9,11 @@
  * compared with the oracle's expectation:
  *   - an invalid argument or a call illegal in the current state returns fmi2Error with a logged
  *     reason and leaves the instance as it was (outputs read back bit for bit unchanged);
- *   - a valid call in a valid state returns fmi2OK; inside the "sane" parameter domain (below) a
- *     step never fails, outside it (extreme but in-range values, crafted FMU states) a step may
- *     end in fmi2Discard (with fmi2Terminated true) or be refused, but never silently;
+ *   - a valid call in a valid state returns fmi2OK; inside the "sane" domain (wild(): moderate
+ *     parameters, mass above the plate at the start, external inputs following a reference
+ *     sinusoid) a step never fails; a run that left it (extreme but in-range values, random input
+ *     derivatives, crafted FMU states) may end a step in fmi2Discard (with fmi2Terminated true and
+ *     LastSuccessfulTime within the step) or have it refused with a logged reason;
  *   - after every call the outputs (when readable) are finite and physical: the mass is never below
  *     the plate by more than GAP_BOUND (relative), energies are >= 0 and agree with v, the well
  *     agrees with x, counts never decrease along a run, the last impact is not in the future;
@@ -24,7 +26,10 @@
  *     recomputed checksum ("crafted": one field mutated) is either refused or gives a state that
  *     satisfies all of the above.
  * A per-call watchdog (FUZZ_CALL_TIMEOUT seconds, default 20) reports a hang; a crash is reported
- * with the seed and the last calls. FUZZ_TRACE=1 prints every call.
+ * with the seed and the last calls. FUZZ_TRACE=1 prints every call, FUZZ_QUIET=1 only failing
+ * seeds, FUZZ_SAVE_DIR=DIR writes accepted crafted buffers and, on a failure, the serialized state
+ * before the last step (for regression tests). Valid steps that would take long (more than 1e4
+ * shaker radians) are not generated: their cost is linear in their length, not a fault.
  */
 #include "host.h"
 

@@ -66,7 +66,25 @@ impl Vr {
     }
 }
 
-/// A step size: up to 2 s in 65536ths, `m * 10^e` (e in [-330, 8]), or a special value.
+/// Special step sizes: refused ones and a long valid one (1e4; valid steps up to 1e6 shaker
+/// radians are allowed but cost up to a second, ten under the sanitizer: not generated).
+const STEP_SPECIALS: [f64; 13] = [
+    f64::NAN,
+    f64::INFINITY,
+    f64::NEG_INFINITY,
+    0.0,
+    -0.0,
+    1e300,
+    -1e300,
+    1e-300,
+    5e-324,
+    f64::MAX,
+    1e12,
+    1e20,
+    1e4,
+];
+
+/// A step size: up to 2 s in 32768ths, `m * 10^e` (e in [-330, 2]), or a special value.
 #[derive(Arbitrary, Debug, Clone, Copy)]
 enum Step {
     Unit(u16),
@@ -78,8 +96,8 @@ impl Step {
     fn get(self) -> f64 {
         match self {
             Step::Unit(u) => (f64::from(u) + 1.0) / 32768.0,
-            Step::Pow(m, e) => f64::from(m) * 10f64.powi(i32::from(e).clamp(-330, 8)),
-            Step::Special(k) => SPECIALS[usize::from(k) % SPECIALS.len()],
+            Step::Pow(m, e) => f64::from(m) * 10f64.powi(i32::from(e).clamp(-330, 2)),
+            Step::Special(k) => STEP_SPECIALS[usize::from(k) % STEP_SPECIALS.len()],
         }
     }
 }
