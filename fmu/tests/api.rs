@@ -1013,4 +1013,13 @@ fn a_state_driven_far_out_of_scope_ends_in_a_discard_not_a_hang() {
     ] {
         assert!(f.real(i).is_finite(), "{}", VARS[i].name);
     }
+    // Found by the setters fuzz target as a timeout: V = 1e6 (its maximum) and a step of
+    // 10,900 s; with a flat budget of 1e7 core steps the Discard took 6 s (a minute under the
+    // sanitizer). The budget now grows with the step's span: 1e6 core steps here.
+    let mut g = Fmu::started(&[(var::V, 1e6)]);
+    let t0 = std::time::Instant::now();
+    let s = g.step(10900.0);
+    assert!(t0.elapsed().as_secs_f64() < 3.0, "{:?}", t0.elapsed());
+    assert_eq!(s, fmi2Discard);
+    assert!(g.messages().join("\n").contains("integration steps"));
 }
