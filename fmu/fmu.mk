@@ -29,7 +29,7 @@ TEST_TARGETS += test-fmu
 DEMO_TARGETS += fmu fmu-demo
 STRESS_TARGETS += stress-fmu
 
-fmu:
+fmu: setup
 	$(CARGO) build --release -p bistable-fmu
 	rm -rf $(FMU_STAGE) && mkdir -p $(FMU_STAGE)/binaries/linux64 $(FMU_STAGE)/documentation $(FMU_STAGE)/extra
 	cp modelDescription.xml $(FMU_STAGE)/

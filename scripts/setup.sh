@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Installs everything the build, the tests and the demo need: Debian packages listed in
-# scripts/apt-packages.txt (only those missing) and a Python venv at .venv with
-# scripts/requirements.txt. Safe to run repeatedly; does nothing when all is in place.
+# scripts/apt-packages.txt (only those missing), a Python venv at .venv with
+# scripts/requirements.txt, and the patched dependencies in .deps/ (scripts/patch-deps.sh). Safe to run repeatedly; does nothing when all is in place.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -25,3 +25,5 @@ if [ ! -x .venv/bin/python ] || ! cmp -s scripts/requirements.txt "$stamp"; then
   .venv/bin/pip install -q -r scripts/requirements.txt
   cp scripts/requirements.txt "$stamp"
 fi
+
+bash scripts/patch-deps.sh
