@@ -1,10 +1,11 @@
 # ROS 2 node (included by the top-level Makefile): interop tests against real ROS 2 (rclpy on
 # rmw_fastrtps from the PyPI wheels, interface package built by rosidl) and Cyclone DDS, each
-# test file in its own network namespace (ros/netns.sh). The soak runs SOAK_SECONDS (60).
+# test file in its own network namespace (ros/netns.sh). The soak runs SOAK_SECONDS (60); the
+# fault tests (test_fault_*.py) run short here and long in stress-ros.
 
 ROS_NODE_BIN := target/release/bistable_impact_node
 
-.PHONY: test-ros ros-setup ros-build
+.PHONY: test-ros stress-ros ros-setup ros-build
 
 ## ROS 2 venv (ros/.venv) and the rosidl build of bistable_impact_msgs; skipped when up to date.
 ros-setup: setup
@@ -18,3 +19,25 @@ test-ros: ros-setup ros-build
 	bash ros/run-tests.sh
 
 TEST_TARGETS += test-ros
+
+## Stress and fault campaign, ROS 2 part (part of make stress): the fault tests of tests/ros with
+## long durations (override any of these from the environment); figures as JSON, and the node's
+## logs, in $(ROS_STRESS_OUT).
+ROS_STRESS_OUT ?= $(OUT)/stress-ros
+FAULT_COMMAND_SECONDS ?= 120
+FAULT_CHURN_SECONDS ?= 180
+FAULT_CHURN_KILL_EVERY ?= 3
+FAULT_FLOOD_SECONDS ?= 120
+FAULT_FLOOD_PUBLISHERS ?= 2
+FAULT_FLOOD_BASELINE ?= 10
+
+stress-ros: ros-setup ros-build
+	rm -rf $(ROS_STRESS_OUT) && mkdir -p $(ROS_STRESS_OUT)
+	FAULT_REPORT_DIR=$(abspath $(ROS_STRESS_OUT)) FAULT_COMMAND_SECONDS=$(FAULT_COMMAND_SECONDS) \
+	FAULT_CHURN_SECONDS=$(FAULT_CHURN_SECONDS) FAULT_CHURN_KILL_EVERY=$(FAULT_CHURN_KILL_EVERY) \
+	FAULT_FLOOD_SECONDS=$(FAULT_FLOOD_SECONDS) FAULT_FLOOD_PUBLISHERS=$(FAULT_FLOOD_PUBLISHERS) \
+	FAULT_FLOOD_BASELINE=$(FAULT_FLOOD_BASELINE) PYTEST_ADDOPTS="-s $${PYTEST_ADDOPTS:-}" \
+	bash ros/run-tests.sh tests/ros/test_fault_commands.py tests/ros/test_fault_churn.py tests/ros/test_fault_flood.py
+	@echo "stress-ros: figures in $(ROS_STRESS_OUT)/*.json"
+
+STRESS_TARGETS += stress-ros

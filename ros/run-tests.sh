@@ -11,7 +11,14 @@ export BISTABLE_NODE=${BISTABLE_NODE:-$PWD/target/release/bistable_impact_node}
 export BISTABLE_REFERENCE=${BISTABLE_REFERENCE:-$PWD/target/release/examples/reference_impacts}
 files=("$@")
 [ ${#files[@]} -gt 0 ] || files=(tests/ros/test_*.py)
+failed=()
 for f in "${files[@]}"; do
   echo "== $f"
-  bash ros/netns.sh ros/.venv/bin/python -m pytest -q -p no:cacheprovider "$f"
+  start=$SECONDS
+  bash ros/netns.sh ros/.venv/bin/python -m pytest -q -p no:cacheprovider "$f" || failed+=("$f")
+  echo "== $f: $((SECONDS - start)) s"
 done
+if [ ${#failed[@]} -gt 0 ]; then
+  echo "FAILED: ${failed[*]}" >&2
+  exit 1
+fi

@@ -59,11 +59,17 @@ class NodeProcess:
     def alive(self):
         return self.proc.poll() is None
 
+    def interrupt(self):
+        """Sends SIGINT (the node then stops by itself; `stop` collects it)."""
+        if self.alive():
+            self.proc.send_signal(signal.SIGINT)
+
     def stop(self):
         """Stops the node with SIGINT (as ros2 launch does) and returns its log; the node must
         exit by itself with status 0."""
         if self.log is None:
-            self.proc.send_signal(signal.SIGINT)
+            if self.alive():
+                self.proc.send_signal(signal.SIGINT)
             try:
                 self.proc.wait(timeout=30)
             finally:
@@ -79,14 +85,15 @@ class NodeProcess:
 
 SUMMARY = re.compile(r"stopping at t = (?P<t>\S+) s: (?P<located>\d+) impacts located, (?P<published>\d+) published "
                      r"\((?P<failed>\d+) failed\), (?P<states>\d+) states published \((?P<dropped>\d+) dropped\), "
-                     r"(?P<accepted>\d+) commands accepted, (?P<refused>\d+) refused, (?P<dropped_when_due>\d+) dropped when due")
+                     r"(?P<accepted>\d+) commands accepted, (?P<refused>\d+) refused, (?P<dropped_when_due>\d+) dropped when due; "
+                     r"(?P<paced_ticks>\d+) paced ticks, lateness max (?P<max_lateness_ms>\S+) ms, (?P<late_ticks>\d+) over 10 ms")
 
 
 def summary(log):
     """The node's shutdown summary as numbers (t in s, counts as ints)."""
     m = SUMMARY.search(log)
     assert m, log[-3000:]
-    return {k: (float(v) if k == "t" else int(v)) for k, v in m.groupdict().items()}
+    return {k: (float(v) if k in ("t", "max_lateness_ms") else int(v)) for k, v in m.groupdict().items()}
 
 
 def rss_kib(pid, field="VmRSS"):

@@ -35,25 +35,29 @@ def sinusoid(omega, velocity, t=None, **kw):
     return cdr(sec, ns, mode=0, omega=omega, velocity=velocity, **kw)
 
 
-def invalid_commands(frontier):
-    """Well-formed commands the node refuses whatever its state, by kind. `frontier` [s] is a
-    time not after the node's command frontier (current time or end of the queued commands):
+def invalid_commands(frontier, omega0=1.0, delta_x=1.0):
+    """Well-formed commands the node refuses whatever its state, by kind, for a node with
+    `omega0` [rad/s] and `delta_x` [m] (the limits are nondimensional). `frontier` [s] is a time
+    not after the node's command frontier (current time or end of the queued commands):
     external samples stamped there are refused as not after it."""
-    ok_w, ok_v = 1.75, 0.07
+    w, lv = omega0, omega0 * delta_x  # SI scales of frequency and velocity
+    ok_w, ok_v = 1.75 * w, 0.07 * lv
     later = frontier + 0.5
     sec, ns = stamp_of(later)
     kinds = {
-        "omega_nonfinite": [sinusoid(w, ok_v) for w in (NAN, INF, -INF)],
-        "omega_not_positive": [sinusoid(w, ok_v) for w in (0.0, -0.0, -1e-300, -1.75)],
-        "omega_huge": [sinusoid(w, ok_v) for w in (MAX_ND * (1 + 1e-15), 1e7, 1e300, 1.7976931348623157e308)],
-        "velocity_nonfinite": [sinusoid(ok_w, v) for v in (NAN, INF, -INF)],
-        "velocity_negative": [sinusoid(ok_w, v) for v in (-5e-324, -1e-300, -0.07, -1e300)],
-        "velocity_huge": [sinusoid(ok_w, v) for v in (MAX_ND * (1 + 1e-15), 1e7, 1e300)],
-        "amplitude_huge": [sinusoid(w, v) for w, v in ((5e-324, ok_v), (1e-3, 2e3), (1e-300, 1e-200))],
+        "omega_nonfinite": [sinusoid(x, ok_v) for x in (NAN, INF, -INF)],
+        "omega_not_positive": [sinusoid(x, ok_v) for x in (0.0, -0.0, -1e-300, -ok_w)],
+        "omega_huge": [sinusoid(x, ok_v) for x in (MAX_ND * w * (1 + 1e-15), 10 * MAX_ND * w, 1e300,
+                                                    1.7976931348623157e308)],
+        "velocity_nonfinite": [sinusoid(ok_w, x) for x in (NAN, INF, -INF)],
+        "velocity_negative": [sinusoid(ok_w, x) for x in (-5e-324, -1e-300, -ok_v, -1e300)],
+        "velocity_huge": [sinusoid(ok_w, x) for x in (MAX_ND * lv * (1 + 1e-15), 10 * MAX_ND * lv, 1e300)],
+        "amplitude_huge": [sinusoid(a, b) for a, b in ((5e-324, ok_v), (1e-3 * w, 2e3 * lv), (1e-300, 1e-200))],
         "unused_field_nonfinite": [sinusoid(ok_w, ok_v, z=NAN), sinusoid(ok_w, ok_v, zdot=-INF),
                                    cdr(sec, ns, mode=1, z=0.0, zdot=0.0, omega=NAN)],
         "external_nonfinite": [cdr(sec, ns, mode=1, z=z, zdot=zd) for z, zd in ((NAN, 0.0), (0.0, INF), (-INF, NAN))],
-        "external_huge": [cdr(sec, ns, mode=1, z=z, zdot=zd) for z, zd in ((2e6, 0.0), (0.0, -2e6), (1e300, 1e300))],
+        "external_huge": [cdr(sec, ns, mode=1, z=z, zdot=zd)
+                          for z, zd in ((2 * MAX_ND * delta_x, 0.0), (0.0, -2 * MAX_ND * lv), (1e300, 1e300))],
         "external_not_after_frontier": [cdr(*stamp_of(frontier), mode=1, z=0.01), cdr(0, 1, mode=1, z=0.01),
                                         cdr(1, 0, mode=1, z=0.01)],
         "stamp_negative": [cdr(s, 0, mode=0, omega=ok_w, velocity=ok_v) for s in (-1, INT32_MIN)],

@@ -36,7 +36,7 @@ GROUP_EVERY = 0.25  # simulated seconds between groups of valid commands
 LEAD = 1.0  # a group is sent this long (simulated) before its instant
 INITIAL = (1.75, 0.07)
 # Cyclone DDS warns about every Fast DDS vendor-specific submessage it sees; keep the output short.
-os.environ.setdefault("CYCLONEDDS_URI", "<Tracing><Verbosity>severe</Verbosity></Tracing>")
+os.environ.setdefault("CYCLONEDDS_URI", "<Tracing><Verbosity>severe</Verbosity><OutputFile>/dev/null</OutputFile></Tracing>")
 
 
 @dataclass

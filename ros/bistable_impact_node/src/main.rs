@@ -110,6 +110,14 @@ struct Counters {
     impacts_failed: u64,
     commands: u64,
     commands_refused: u64,
+    /// Paced ticks (real_time_factor > 0) whose lateness was measured.
+    paced_ticks: u64,
+    /// Largest lateness of a state publication: from the wall-clock instant the previous state
+    /// was due to the publication of the next one (the loop publishes a state as soon as it is
+    /// computed, then waits for it to become due).
+    max_lateness: Duration,
+    /// Paced ticks more than 10 ms late.
+    late_ticks: u64,
 }
 
 /// Keeps simulation time at `real_time_factor` times wall-clock time.
@@ -426,6 +434,7 @@ fn run(cfg: Config) -> Result<(), String> {
         throttle: Throttle::new(COMMAND_LOG_BUDGET, Duration::from_secs(1), Instant::now()),
     };
     let mut last_outcome = Outcome::Tick;
+    let mut last_due: Option<Instant> = None;
     publish_tick(&st.runner, &state_pub, &clock_pub, &mut st.n, &log);
     while !stop.load(Ordering::Relaxed) {
         inbox.serve(&mut st, &log);
@@ -447,8 +456,15 @@ fn run(cfg: Config) -> Result<(), String> {
         match outcome {
             Outcome::Tick => {
                 publish_tick(&st.runner, &state_pub, &clock_pub, &mut st.n, &log);
+                if let Some(due) = last_due.take() {
+                    let late = Instant::now().saturating_duration_since(due);
+                    st.n.paced_ticks += 1;
+                    st.n.max_lateness = st.n.max_lateness.max(late);
+                    st.n.late_ticks += u64::from(late > Duration::from_millis(10));
+                }
                 if let Some(due) = st.pacer.due(st.runner.now()) {
                     inbox.wait_until(due, &stop, &mut st, &log);
+                    last_due = Some(due);
                 }
             }
             Outcome::Command => {}
@@ -484,7 +500,8 @@ fn run(cfg: Config) -> Result<(), String> {
         LogLevel::Info,
         &format!(
             "stopping at t = {} s: {} impacts located, {} published ({} failed), {} states \
-             published ({} dropped), {} commands accepted, {} refused, {} dropped when due",
+             published ({} dropped), {} commands accepted, {} refused, {} dropped when due; \
+             {} paced ticks, lateness max {:.3} ms, {} over 10 ms",
             runner.now(),
             runner.impact_count(),
             n.impacts,
@@ -493,14 +510,26 @@ fn run(cfg: Config) -> Result<(), String> {
             n.states_dropped,
             n.commands,
             n.commands_refused,
-            runner.commands_dropped()
+            runner.commands_dropped(),
+            n.paced_ticks,
+            n.max_lateness.as_secs_f64() * 1e3,
+            n.late_ticks
         ),
     );
+    // Reliable subscribers may still be missing some of the last impacts (up to the send window
+    // at a high impact rate): keep DDS running a moment so that they can get them repaired, as
+    // Cyclone DDS's writer linger does. ros2-client has no wait for acknowledgements.
+    if impact_pub.get_subscription_count(&node) > 0 {
+        std::thread::sleep(SHUTDOWN_LINGER);
+    }
     node.stop_spinner();
     drop(node);
     let _ = spin_thread.join();
     Ok(())
 }
+
+/// How long DDS keeps running after the simulation loop ends (with impact subscribers).
+const SHUTDOWN_LINGER: Duration = Duration::from_secs(1);
 
 fn publish_tick(
     runner: &Runner,

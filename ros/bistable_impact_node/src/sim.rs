@@ -273,6 +273,9 @@ impl Runner {
             }
         };
         self.queue.push_back(item);
+        // A command due now takes effect at once (as the next `advance` would do first), so
+        // that commands for "now" never fill the queue, however many arrive between steps.
+        self.apply_due();
         Ok(match item {
             Scheduled::Sinusoid { at, .. } => format!(
                 "shaker sinusoid omega = {} rad/s, velocity = {} m/s from t = {at} s",

@@ -249,7 +249,10 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
         (cmd(0, 0.0, 1e300, 0.1, 0.0, 0.0), "omega"),
         // An in-range Ω and V whose displacement amplitude V/Ω overflows (the core could not
         // continue the plate position with it when it became due).
-        (cmd(0, 0.0, 5e-324, 0.07, 0.0, 0.0), "displacement amplitude"),
+        (
+            cmd(0, 0.0, 5e-324, 0.07, 0.0, 0.0),
+            "displacement amplitude",
+        ),
         (cmd(0, 0.0, 1e-3, 2e3, 0.0, 0.0), "displacement amplitude"),
         (cmd(0, 0.0, 1.0, 0.1, f64::NEG_INFINITY, 0.0), "z = -inf"),
         (cmd(1, 0.0, 0.0, 0.0, 0.0, nan), "zdot"),
@@ -278,6 +281,16 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
     let last = impacts.last().unwrap();
     assert_eq!(last.t, reference[last.index as usize].t);
     assert_eq!(r.state().shaker_omega, 1.75);
+    // Commands due now take effect at once: any number of them between two steps is accepted
+    // (regression: under a flood of such commands the queue filled and valid ones were
+    // refused).
+    for k in 0..5 * MAX_QUEUED_COMMANDS {
+        let v = if k % 2 == 0 { 0.07 } else { 0.08 };
+        r.command(&cmd(0, 0.0, 1.75, v, 0.0, 0.0)).unwrap();
+    }
+    assert_eq!(r.state().shaker_velocity, 0.08);
+    assert_eq!(r.commands_dropped(), 0);
+    r.command(&cmd(0, 0.0, 1.75, 0.07, 0.0, 0.0)).unwrap();
     // The queue is bounded.
     for k in 0..MAX_QUEUED_COMMANDS {
         r.command(&cmd(0, 100.0 + k as f64, 1.75, 0.07, 0.0, 0.0))
