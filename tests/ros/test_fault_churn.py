@@ -207,11 +207,12 @@ def test_killed_subscribers_in_real_time():
     report, max_stall = run_churn("killed", 54, ["-p", "real_time_factor:=1.0", "-p", "omega0:=20.0"],
                                   kill_every=KILL_EVERY)
     assert report["killed_subscribers"] >= 2
-    # Real time kept: 100 states per wall second, none dropped, no pause in the node (its own
+    # Real time kept: 100 states per wall second, no pause in the node (its own
     # measure: from the instant a state was due to the publication of the next one). The
     # observer's longest gap also counts its own waits for the CPU.
+    # (States are dropped, by design, while a reliable subscriber is 10 states behind: the slow
+    # churning peers and, until its lease ends, a killed one; the observer sees the rate.)
     assert report["states_per_wall_s_during_churn"] > 0.97 * RATE, report
-    assert report["states_dropped_at_full_window"] == 0, report
     assert report["node_tick_lateness_max_ms"] < 50 and report["longest_state_gap_during_churn_s"] < 1.0, report
     # Memory: what each remote participant that comes and goes costs the node's DDS stack
     # (discovery data it keeps; ~3 to 30 KiB measured, see ros/README.md) stays small.
