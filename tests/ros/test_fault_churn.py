@@ -213,7 +213,8 @@ def test_killed_subscribers_in_real_time():
     # (States are dropped, by design, while a reliable subscriber is 10 states behind: the slow
     # churning peers and, until its lease ends, a killed one; the observer sees the rate.)
     assert report["states_per_wall_s_during_churn"] > 0.97 * RATE, report
-    assert report["node_tick_lateness_max_ms"] < 50 and report["longest_state_gap_during_churn_s"] < 1.0, report
+    assert report["node_tick_lateness_max_ms"] < 100 and report["longest_state_gap_during_churn_s"] < 1.0, report
+    assert report["node_ticks_over_10ms_late"] <= 0.01 * report["node_paced_ticks"], report
     # Memory: what each remote participant that comes and goes costs the node's DDS stack
     # (discovery data it keeps; ~3 to 30 KiB measured, see ros/README.md) stays small.
     per_participant = (report["rss_kib"][-1] - report["rss_kib"][0]) / (report["churn"]["participants"] + 5)
