@@ -171,16 +171,8 @@ struct Summary {
 pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let (models, range) = grid(args)?;
-    if args.record == 0 {
-        return Err(CliError::invalid_text("--record", 0, "must be >= 1"));
-    }
-    if args.samples < 8 {
-        return Err(CliError::invalid_text(
-            "--samples",
-            args.samples,
-            "must be >= 8",
-        ));
-    }
+    CliError::at_least("--record", args.record, 1)?;
+    CliError::at_least("--samples", args.samples, 8)?;
     if let Some(&p) = args
         .branch_periods
         .iter()

@@ -97,13 +97,7 @@ impl ClassifyArgs {
             return Err(CliError::invalid("--period-tol", t, "must be in (0, 1e-3]"));
         }
         let lyapunov_periods = self.lyapunov_periods.unwrap_or(lyapunov_default);
-        if lyapunov_periods == 0 {
-            return Err(CliError::invalid_text(
-                "--lyapunov-periods",
-                0,
-                "must be >= 1",
-            ));
-        }
+        CliError::at_least("--lyapunov-periods", lyapunov_periods, 1)?;
         Ok(ClassifyOptions {
             max_natural_periods: p,
             full_length: self.full,

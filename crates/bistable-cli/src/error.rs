@@ -54,6 +54,23 @@ impl CliError {
         }
     }
 
+    /// `Ok` when the count given for `option` is at least `min`, else the error naming both.
+    pub fn at_least<T: PartialOrd + fmt::Display>(
+        option: &str,
+        value: T,
+        min: T,
+    ) -> Result<(), Self> {
+        if value >= min {
+            Ok(())
+        } else {
+            Err(Self::invalid_text(
+                option,
+                value,
+                format!("must be >= {min}"),
+            ))
+        }
+    }
+
     /// An I/O error on `path`.
     pub fn io(action: &'static str, path: &Path, source: std::io::Error) -> Self {
         CliError::Io {

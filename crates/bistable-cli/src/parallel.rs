@@ -12,8 +12,7 @@ use crate::progress::Progress;
 /// cores.
 pub fn threads(requested: Option<usize>, option: &str) -> Result<usize, CliError> {
     match requested {
-        Some(0) => Err(CliError::invalid_text(option, 0, "must be >= 1")),
-        Some(n) => Ok(n),
+        Some(n) => CliError::at_least(option, n, 1).map(|()| n),
         None => Ok(std::thread::available_parallelism().map_or(2, |n| n.get())),
     }
 }

@@ -459,20 +459,8 @@ impl Plan {
             }
             None => None,
         };
-        if args.plot_samples < 10 {
-            return Err(CliError::invalid_text(
-                "--plot-samples",
-                args.plot_samples,
-                "must be >= 10",
-            ));
-        }
-        if args.plot_max_points < 1000 {
-            return Err(CliError::invalid_text(
-                "--plot-max-points",
-                args.plot_max_points,
-                "must be >= 1000",
-            ));
-        }
+        CliError::at_least("--plot-samples", args.plot_samples, 10)?;
+        CliError::at_least("--plot-max-points", args.plot_max_points, 1000)?;
         let plot_dt = model.shaker_period().min(TAU) / f64::from(args.plot_samples);
         let span = plot_dt * (args.plot_max_points - 1) as f64;
         let plot_window_start = if t_end > span {

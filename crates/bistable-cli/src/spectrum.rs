@@ -129,20 +129,8 @@ pub fn flatness(spec: &[(f64, f64)], max_f: f64) -> f64 {
 /// Runs `bistable spectrum`.
 pub fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let model = Model::from_args(&args.common)?;
-    if args.record < 8 {
-        return Err(CliError::invalid_text(
-            "--record",
-            args.record,
-            "must be >= 8",
-        ));
-    }
-    if args.samples < 4 {
-        return Err(CliError::invalid_text(
-            "--samples",
-            args.samples,
-            "must be >= 4",
-        ));
-    }
+    CliError::at_least("--record", args.record, 8)?;
+    CliError::at_least("--samples", args.samples, 4)?;
     if u64::from(args.record) * u64::from(args.samples) > 1 << 26 {
         return Err(CliError::invalid_text(
             "--record",
