@@ -1,8 +1,10 @@
 """Helpers of the ROS 2 interop tests: the node as a subprocess, the core's reference impact
-list, and spinning an rclpy node until a condition holds."""
+list, spinning an rclpy node until a condition holds, the impact subscription of the checks,
+and the fault tests' report files."""
 import csv
 import ctypes
 import io
+import json
 import os
 import pathlib
 import re
@@ -155,3 +157,25 @@ class Spinner:
         self.executor.shutdown(timeout_sec=1)
         self.node.destroy_node()
         self.rclpy.shutdown(context=self.context)
+
+
+def keep_all_impacts():
+    """QoS of a subscriber that must see every impact: reliable, transient local and keep-all, so
+    that its own history never drops one when the Python process falls behind (the node waits
+    only for acknowledgements, which DDS sends on receipt) and the check is about the node."""
+    from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+
+    return QoSProfile(depth=1000, history=HistoryPolicy.KEEP_ALL,
+                      reliability=ReliabilityPolicy.RELIABLE,
+                      durability=DurabilityPolicy.TRANSIENT_LOCAL)
+
+
+def report_file(name, content):
+    """Writes `content` (a dict as JSON, else text) to $FAULT_REPORT_DIR/`name` when it is set."""
+    out = os.environ.get("FAULT_REPORT_DIR")
+    if out:
+        with open(os.path.join(out, name), "w") as f:
+            if isinstance(content, dict):
+                json.dump(content, f, indent=1)
+            else:
+                f.write(content)

@@ -24,8 +24,8 @@ import sys
 import time
 
 from bistable_impact_msgs.msg import ImpactEvent, MassState
-from common import NodeProcess, Spinner, _die_with_parent, rss_kib, summary
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from common import NodeProcess, Spinner, _die_with_parent, keep_all_impacts, report_file, rss_kib, summary
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 SECONDS = float(os.environ.get("FAULT_CHURN_SECONDS", "12"))
 KILL_EVERY = float(os.environ.get("FAULT_CHURN_KILL_EVERY", "2"))
@@ -86,11 +86,7 @@ def run_churn(name, domain, node_args, kill_every=None):
     p = Persistent()
     sp.node.create_subscription(MassState, "/bistable/mass_state", p.state,
                                 QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-    # Keep-all: this subscriber's own history never drops an impact, whatever the CPU load.
-    sp.node.create_subscription(ImpactEvent, "/bistable/impacts", p.impact,
-                                QoSProfile(depth=1000, history=HistoryPolicy.KEEP_ALL,
-                                           reliability=ReliabilityPolicy.RELIABLE,
-                                           durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    sp.node.create_subscription(ImpactEvent, "/bistable/impacts", p.impact, keep_all_impacts())
     node = NodeProcess(*node_args, "-p", f"publish_rate:={RATE}", domain=domain)
     churners, held, kills = [], None, 0
     rss, sim_per_s = [], []
@@ -179,12 +175,8 @@ def run_churn(name, domain, node_args, kill_every=None):
         "peak_rss_kib": peak,
     }
     print("FAULT_CHURN " + json.dumps(report))
-    out = os.environ.get("FAULT_REPORT_DIR")
-    if out:
-        with open(os.path.join(out, f"churn-{name}.json"), "w") as f:
-            json.dump(report, f, indent=1)
-        with open(os.path.join(out, f"churn-{name}-node.log"), "w") as f:
-            f.write(log)
+    report_file(f"churn-{name}.json", report)
+    report_file(f"churn-{name}-node.log", log)
 
     # No impact lost to the subscriber that stayed; none out of order for the churned ones.
     assert s["failed"] == 0 and p.gaps == 0, (p.gap_list, s)

@@ -19,7 +19,7 @@ from dataclasses import dataclass
 
 import hostile
 from bistable_impact_msgs.msg import ImpactEvent, MassState, ShakerCommand
-from common import NodeProcess, Spinner, rss_kib, summary
+from common import NodeProcess, Spinner, report_file, rss_kib, summary
 from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
 from cyclonedds.idl import IdlStruct
@@ -186,9 +186,7 @@ def test_hostile_commands_are_refused_and_valid_ones_applied():
         log = node.stop()
         sp.spin_for(1.0)
         sp.close()
-    if os.environ.get("FAULT_REPORT_DIR"):
-        with open(os.path.join(os.environ["FAULT_REPORT_DIR"], "commands-node.log"), "w") as f:
-            f.write(log)
+    report_file("commands-node.log", log)
     s = summary(log)
 
     # Counts: every valid command accepted (plus the probes that arrived), every refused one
@@ -240,7 +238,4 @@ def test_hostile_commands_are_refused_and_valid_ones_applied():
         "peak_rss_kib": peak,
     }
     print("FAULT_COMMANDS " + json.dumps(report))
-    out = os.environ.get("FAULT_REPORT_DIR")
-    if out:
-        with open(os.path.join(out, "commands.json"), "w") as f:
-            json.dump(report, f, indent=1)
+    report_file("commands.json", report)

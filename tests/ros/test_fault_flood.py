@@ -20,8 +20,8 @@ import threading
 import time
 
 from bistable_impact_msgs.msg import ImpactEvent, MassState
-from common import NodeProcess, Spinner, _die_with_parent, rss_kib, summary
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from common import NodeProcess, Spinner, _die_with_parent, keep_all_impacts, report_file, rss_kib, summary
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 SECONDS = float(os.environ.get("FAULT_FLOOD_SECONDS", "10"))
 PUBLISHERS = int(os.environ.get("FAULT_FLOOD_PUBLISHERS", "1"))
@@ -88,10 +88,7 @@ def test_command_flood_in_real_time():
     rec = Recorder()
     sp.node.create_subscription(MassState, "/bistable/mass_state", rec.state,
                                 QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE))
-    sp.node.create_subscription(ImpactEvent, "/bistable/impacts", rec.impact,
-                                QoSProfile(depth=1000, history=HistoryPolicy.KEEP_ALL,
-                                           reliability=ReliabilityPolicy.RELIABLE,
-                                           durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    sp.node.create_subscription(ImpactEvent, "/bistable/impacts", rec.impact, keep_all_impacts())
     node = NodeProcess("-p", "real_time_factor:=1.0", "-p", f"publish_rate:={RATE}", "-p", f"omega0:={OMEGA0}",
                        domain=domain)
     flooders, floods, rss = [], [], []
@@ -169,12 +166,8 @@ def test_command_flood_in_real_time():
         "peak_rss_kib": peak,
     }
     print("FAULT_FLOOD " + json.dumps(report))
-    out = os.environ.get("FAULT_REPORT_DIR")
-    if out:
-        with open(os.path.join(out, "flood.json"), "w") as f:
-            json.dump(report, f, indent=1)
-        with open(os.path.join(out, "flood-node.log"), "w") as f:
-            f.write(log)
+    report_file("flood.json", report)
+    report_file("flood-node.log", log)
 
     # Every command taken: valid ones accepted, the others refused; empty samples never reach
     # the node (nothing to deserialize).

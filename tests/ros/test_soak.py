@@ -9,9 +9,9 @@ import time
 
 import rclpy
 from bistable_impact_msgs.msg import ImpactEvent, MassState
-from common import NodeProcess
+from common import NodeProcess, keep_all_impacts
 from rclpy.node import Node
-from rclpy.qos import DurabilityPolicy, HistoryPolicy, QoSProfile, ReliabilityPolicy
+from rclpy.qos import QoSProfile, ReliabilityPolicy
 from rosgraph_msgs.msg import Clock
 
 SECONDS = float(os.environ.get("SOAK_SECONDS", "60"))
@@ -57,13 +57,7 @@ def test_soak_free_running():
     deep = QoSProfile(depth=1000, reliability=ReliabilityPolicy.RELIABLE)
     peer.create_subscription(MassState, "/bistable/mass_state", c.state, deep)
     peer.create_subscription(Clock, "/clock", c.clock, 10)
-    # Keep-all: a keep-last history would drop impacts by itself whenever this Python process
-    # falls 1000 impacts behind (the node waits only for acknowledgements, which DDS sends on
-    # receipt), and the check is about the node.
-    peer.create_subscription(ImpactEvent, "/bistable/impacts", c.impact,
-                             QoSProfile(depth=1000, history=HistoryPolicy.KEEP_ALL,
-                                        reliability=ReliabilityPolicy.RELIABLE,
-                                        durability=DurabilityPolicy.TRANSIENT_LOCAL))
+    peer.create_subscription(ImpactEvent, "/bistable/impacts", c.impact, keep_all_impacts())
     ex = rclpy.executors.SingleThreadedExecutor(context=ctx)
     ex.add_node(peer)
     node = NodeProcess("-p", "real_time_factor:=0.0", "-p", f"publish_rate:={RATE}", domain=domain)
