@@ -251,7 +251,7 @@ fn validate(p: &RefParams, o: &RefOptions) -> Result<(), RefError> {
 /// (at most `o.max_events`).
 pub fn simulate(p: &RefParams, o: &RefOptions) -> Result<Vec<RefEvent>, RefError> {
     validate(p, o)?;
-    let mut run = sim::Run::new(p, o, None, &[], o.max_events)?;
+    let mut run = sim::Run::new(p, o, &RefStart::PAPER, &[], o.max_events)?;
     run.run(o.t_end)?;
     Ok(run.events)
 }
@@ -267,6 +267,15 @@ pub struct RefStart {
     pub x0: f64,
     /// Velocity.
     pub v0: f64,
+}
+
+impl RefStart {
+    /// The paper's start: `τ = 0`, `x = x' = 0`, on the plate as it moves up at `V`.
+    pub const PAPER: RefStart = RefStart {
+        t0: 0.0,
+        x0: 0.0,
+        v0: 0.0,
+    };
 }
 
 /// Simulate from `start` to `o.t_end` (`>= start.t0`) and return all events in time order
@@ -293,7 +302,7 @@ pub fn simulate_from(
             )
         },
     )?;
-    let mut run = sim::Run::new(p, o, Some(start), &[], o.max_events)?;
+    let mut run = sim::Run::new(p, o, start, &[], o.max_events)?;
     run.run(o.t_end)?;
     Ok(run.events)
 }
@@ -309,7 +318,7 @@ pub fn sample_hp(p: &RefParams, o: &RefOptions, times: &[f64]) -> Result<Vec<Ref
         })?;
     }
     let t_last = times.iter().cloned().fold(0.0, f64::max);
-    let mut run = sim::Run::new(p, o, None, times, usize::MAX)?;
+    let mut run = sim::Run::new(p, o, &RefStart::PAPER, times, usize::MAX)?;
     run.run(t_last)?;
     run.finish_samples()
 }

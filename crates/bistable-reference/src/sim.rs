@@ -52,43 +52,30 @@ pub(crate) struct Run {
 }
 
 impl Run {
-    /// A run from the paper's start (`start = None`) or from `start` (which must be validated:
-    /// on or above the plate, see [`crate::simulate_from`]).
+    /// A run from `start`, taken exactly (validated by the caller, see [`crate::simulate_from`]);
+    /// refused if it is below the plate in working precision.
     pub fn new(
         p: &RefParams,
         o: &RefOptions,
-        start: Option<&RefStart>,
+        start: &RefStart,
         times: &[f64],
         max_events: usize,
     ) -> Result<Run, RefError> {
         let prec = Prec { bits: o.bits };
         let m = Model::new(prec, p.zeta, p.restitution, p.omega, p.velocity);
-        let zero = prec.zero();
-        // Paper's start τ = 0: x = x' = 0, z = 0, ż = V, so u = 0 and w = -V (impact 0 happens
-        // at once). Otherwise the given state, exactly.
-        let (tau, mode, well) = match start {
-            None => (
-                zero.clone(),
-                Mode::Free {
-                    u: zero.clone(),
-                    w: -m.v.clone(),
-                },
-                1,
-            ),
-            Some(st) => {
-                let tau = prec.exact(st.t0);
-                let (z, zd) = m.plate(&tau);
-                let u = prec.exact(st.x0) - z;
-                if sgn(&u) < 0 {
-                    return Err(RefError::InvalidInput(format!(
-                        "start x0 = {} is below the plate at t0 = {}",
-                        st.x0, st.t0
-                    )));
-                }
-                let w = prec.exact(st.v0) - zd;
-                (tau, Mode::Free { u, w }, if st.x0 > 0.5 { 2 } else { 1 })
-            }
-        };
+        // In flight with gap u = x − z ≥ 0 and rate w = x' − ż (from the paper's start, u = 0
+        // and w = −V: impact 0 happens at once).
+        let tau = prec.exact(start.t0);
+        let (z, zd) = m.plate(&tau);
+        let u = prec.exact(start.x0) - z;
+        if sgn(&u) < 0 {
+            return Err(RefError::InvalidInput(format!(
+                "start x0 = {} is below the plate at t0 = {}",
+                start.x0, start.t0
+            )));
+        }
+        let w = prec.exact(start.v0) - zd;
+        let (mode, well) = (Mode::Free { u, w }, if start.x0 > 0.5 { 2 } else { 1 });
         let mut sample_order: Vec<usize> = (0..times.len()).collect();
         sample_order.sort_by(|&a, &b| times[a].total_cmp(&times[b]));
         Ok(Run {
