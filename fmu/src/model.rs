@@ -9,8 +9,8 @@ use std::ops::ControlFlow;
 
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Instant, Observer, ParamError, Params,
-    PlateMotion, PlateRecord, PolyPiece, SimError, Simulator, Sinusoid, SolverOptions, StepView,
-    Well,
+    PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator, Sinusoid,
+    SolverOptions, StepView, Well,
 };
 
 use crate::md::var;
@@ -55,6 +55,29 @@ impl ShakerMode {
         match value {
             1.0 => Some(Self::Internal),
             2.0 => Some(Self::External),
+            _ => None,
+        }
+    }
+}
+
+/// How the plate is rebuilt from sampled inputs in external mode (`plate_reconstruction`, an
+/// Enumeration in the model description). Input derivatives, when given for a step, take
+/// precedence over both.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Reconstruction {
+    /// `z_in + zdot_in·s`, the position mismatch blended out over the step (first order: the
+    /// plate velocity is a staircase and its acceleration is wrong by `O(1)`).
+    Taylor = 1,
+    /// Quintic Hermite extrapolation through the last three samples (`bistable_core::sampled`).
+    Hermite = 2,
+}
+
+impl Reconstruction {
+    /// From the variable's value (range-checked at the boundary).
+    pub fn of(value: f64) -> Option<Self> {
+        match value {
+            1.0 => Some(Self::Taylor),
+            2.0 => Some(Self::Hermite),
             _ => None,
         }
     }
@@ -154,6 +177,11 @@ pub struct Model {
     pending: Option<f64>,
     /// A lower bound on the end (`τ`) of the core's current Taylor step (`-inf`: unknown).
     taylor_end: f64,
+    /// External mode: the plate samples of the last communication points.
+    pub history: SampleHistory,
+    /// Momentum per unit mass given to the plate by the impacts of the last step,
+    /// `Σ (v_before − v_after)` (units of `ω0 Δx`).
+    pub impulse: f64,
 }
 
 /// Collects the events of an advance and the end of the last Taylor step computed.
@@ -297,6 +325,8 @@ impl Model {
             time: t_start,
             pending: None,
             taylor_end,
+            history: SampleHistory::new(),
+            impulse: impulse_of(events),
         })
     }
 
@@ -377,6 +407,17 @@ impl Model {
             ));
         }
         check_inside_step(&sim, if external { 1.0 } else { omega })?;
+        let history = SampleHistory::from_entries(&saved.history)
+            .filter(|h| {
+                h.newest().is_none_or(|s| s.t <= sim.instant())
+                    && (external || h.newest().is_none())
+            })
+            .ok_or(
+                "the FMU state's plate samples are not increasing, not finite or after its time",
+            )?;
+        if !saved.impulse.is_finite() {
+            return Err("the FMU state's plate impulse is not finite".into());
+        }
         let mut model = Self {
             sim,
             scale,
@@ -386,6 +427,8 @@ impl Model {
             time: saved.time,
             pending: None,
             taylor_end: f64::NEG_INFINITY,
+            history,
+            impulse: saved.impulse,
         };
         model.check_physical(values)?;
         Ok(model)
@@ -461,6 +504,8 @@ impl Model {
             ),
             applied: self.applied,
             time: self.time,
+            history: self.history.entries().collect(),
+            impulse: self.impulse,
         })
     }
 
@@ -476,6 +521,7 @@ impl Model {
         events: &mut Vec<Event>,
     ) -> Result<(), StepFailure> {
         let (tau_end, _, same_plate) = self.plan(t_end, values);
+        self.impulse = 0.0;
         if same_plate && tau_end < self.taylor_end {
             self.pending = Some(tau_end);
             self.time = t_end;
@@ -514,7 +560,12 @@ impl Model {
         let refuse = |e: &SimError, s: &Scale| StepFailure::Refused(describe(e, s));
         // The model at the communication point, to go back to if the step fails in a way that
         // leaves no usable state (a few hundred bytes; this path computes Taylor steps anyway).
-        let undo = (self.sim.checkpoint(), self.phase_ref, self.applied);
+        let undo = (
+            self.sim.checkpoint(),
+            self.phase_ref,
+            self.applied,
+            self.history,
+        );
         let undo_time = self.time;
         // A refused step leaves the model as it was: everything that can fail comes before the
         // first change (the phase reference, the plate), and each change is checked by the core
@@ -529,10 +580,28 @@ impl Model {
         };
         match self.mode {
             ShakerMode::External => {
-                let z_now = self.sim.state().z;
+                let st = self.sim.state();
                 let inputs = plate_inputs(values, derivatives);
-                let piece = plate_piece(&self.scale, now, tau_end, &inputs, Some(z_now))
-                    .map_err(StepFailure::Refused)?;
+                let sample = Sample {
+                    t: now,
+                    z: inputs[0].unwrap_or(0.0) / self.scale.dx,
+                    zdot: inputs[1].unwrap_or(0.0) / (self.scale.omega0 * self.scale.dx),
+                };
+                let mut history = self.history;
+                history
+                    .push(sample)
+                    .map_err(|e| StepFailure::Refused(describe_param(&e)))?;
+                let derivatives_given = inputs[2..].iter().any(Option::is_some);
+                let scheme = Reconstruction::of(values[var::plate_reconstruction]);
+                let piece = if derivatives_given || scheme != Some(Reconstruction::Hermite) {
+                    plate_piece(&self.scale, now, tau_end, &inputs, Some(st.z))
+                } else {
+                    history
+                        .piece(Instant::new(tau_end), (st.z, st.zdot))
+                        .map_err(|e| describe_param(&e))
+                }
+                .map_err(StepFailure::Refused)?;
+                self.history = history;
                 if let Err(e) = self.sim.set_plate(piece.into()) {
                     self.undo(&undo);
                     return Err(refuse(&e, &self.scale));
@@ -557,7 +626,9 @@ impl Model {
             budget: step_budget(radians),
         };
         let obs_budget = obs.budget;
+        let first_event = obs.events.len();
         let advanced = self.sim.advance(tau_end, &mut obs);
+        self.impulse = impulse_of(&events[first_event..]);
         // Stopped by the observer: the work budget is spent.
         let over_budget = matches!(advanced, Ok(false));
         let result = match advanced {
@@ -609,11 +680,13 @@ impl Model {
     }
 
     /// Back to the state saved before a step (see [`Model::step_core`]).
-    fn undo(&mut self, (cp, phase_ref, applied): &(Checkpoint, Sinusoid, (f64, f64))) {
+    fn undo(&mut self, (cp, phase_ref, applied, history): &Undo) {
         if let Ok(sim) = Simulator::from_checkpoint(cp) {
             self.sim = sim;
             self.phase_ref = *phase_ref;
             self.applied = *applied;
+            self.history = *history;
+            self.impulse = 0.0;
             self.taylor_end = f64::NEG_INFINITY;
             self.pending = None;
         }
@@ -656,6 +729,7 @@ impl Model {
         values[var::last_impact_v_before] = vb;
         values[var::last_impact_v_after] = va;
         values[var::last_impact_delta_k] = dk;
+        values[var::plate_impulse] = s.mass * s.velocity(self.impulse);
         Ok(())
     }
 
@@ -766,6 +840,20 @@ fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
 /// check independent of those choices while bounding the work below.
 const MAX_SAVED_STEP: f64 = 64.0;
 
+/// The model at a communication point, to go back to when a step fails: core, phase reference,
+/// `(Ω, V)` in force, plate samples.
+type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory);
+
+/// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they
+/// gave the plate.
+fn impulse_of(events: &[Event]) -> f64 {
+    events
+        .iter()
+        .filter_map(Event::impact)
+        .map(|i| i.v_before - i.v_after)
+        .sum()
+}
+
 /// Counts what an advance computes, stopping at the first event.
 #[derive(Default)]
 struct Probe {
@@ -811,7 +899,7 @@ fn check_inside_step(sim: &Simulator, omega: f64) -> Result<(), String> {
 }
 
 /// The parts of a [`Model`] an FMU state keeps (plain numbers).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, PartialEq)]
 pub struct SavedModel {
     /// Core checkpoint.
     pub checkpoint: Checkpoint,
@@ -821,6 +909,10 @@ pub struct SavedModel {
     pub applied: (f64, f64),
     /// Communication time (s).
     pub time: f64,
+    /// External mode: plate samples `(sample, joined)`, oldest first (see [`SampleHistory`]).
+    pub history: Vec<(Sample, bool)>,
+    /// Momentum per unit mass given to the plate in the last step (see [`Model::impulse`]).
+    pub impulse: f64,
 }
 
 /// The plate over `[start, end]` (τ) from the inputs: their Taylor polynomial at the step start

@@ -6,8 +6,10 @@
 //! refuses a wrong magic, version, length, checksum or guid, truncation, unknown tags and
 //! trailing bytes; the instance then checks the values themselves (ranges, core checkpoint).
 
+use bistable_core::sampled::MAX_SAMPLES;
 use bistable_core::{
-    ChatterRule, Checkpoint, ContactMode, Impact, PlateRecord, Stats, StickCause, Well,
+    ChatterRule, Checkpoint, ContactMode, Impact, Instant, PlateRecord, Sample, Stats, StickCause,
+    Well,
 };
 
 use crate::instance::Lifecycle;
@@ -17,7 +19,7 @@ use crate::model::{PlateInputs, SavedModel, MAX_PLATE_ORDER};
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"BIFMUST\0";
 /// Format version; bump on any layout change.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// Everything an instance needs to continue exactly from a saved point.
 #[derive(Debug, Clone, PartialEq)]
@@ -182,6 +184,13 @@ impl Snapshot {
             [a, b, c, d, e, f].iter().for_each(|&v| w.f64(v));
             w.pair(m.applied);
             w.f64(m.time);
+            w.u8(m.history.len() as u8);
+            for (s, joined) in &m.history {
+                w.pair(s.t.parts());
+                w.pair((s.z, s.zdot));
+                w.u8(u8::from(*joined));
+            }
+            w.f64(m.impulse);
         });
         let total = (w.0.len() + 8) as u64;
         w.0[12..20].copy_from_slice(&total.to_le_bytes());
@@ -247,6 +256,8 @@ impl Snapshot {
                     phase_ref: (r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?),
                     applied: r.pair()?,
                     time: r.f64()?,
+                    history: get_history(r)?,
+                    impulse: r.f64()?,
                 })
             })?,
         };
@@ -258,6 +269,26 @@ impl Snapshot {
         }
         Ok(snap)
     }
+}
+
+/// Plate samples of a saved model: a count of at most [`MAX_SAMPLES`], then per sample its
+/// instant `(hi, lo)`, `z`, `ż` and the `joined` flag (values are checked on restore).
+fn get_history(r: &mut Reader) -> Res<Vec<(Sample, bool)>> {
+    let n = r.u8()?;
+    if usize::from(n) > MAX_SAMPLES {
+        return Err(format!(
+            "corrupt FMU state: {n} plate samples (at most {MAX_SAMPLES})"
+        ));
+    }
+    (0..n)
+        .map(|_| {
+            let (hi, lo) = r.pair()?;
+            let t = Instant::from_parts(hi, lo)
+                .ok_or("corrupt FMU state: invalid plate sample instant")?;
+            let (z, zdot) = r.pair()?;
+            Ok((Sample { t, z, zdot }, r.bool("plate sample joined")?))
+        })
+        .collect()
 }
 
 fn put_checkpoint(w: &mut Writer, c: &Checkpoint) {
@@ -441,7 +472,12 @@ mod tests {
         let snaps = samples();
         let kinds: Vec<_> = snaps
             .iter()
-            .map(|s| matches!(s.model.unwrap().checkpoint.plate, PlateRecord::Poly { .. }))
+            .map(|s| {
+                matches!(
+                    s.model.as_ref().unwrap().checkpoint.plate,
+                    PlateRecord::Poly { .. }
+                )
+            })
             .collect();
         assert_eq!(kinds, [false, true]);
         for s in snaps {

@@ -47,10 +47,23 @@ CASES = {
     ),
     "external_shaker": (
         "external mode: the baseline sinusoid sampled every 0.05 s through z_in, zdot_in "
-        "(fmpy input table; fmpy 0.3.32's set_input_derivatives only works with 9 inputs, so "
-        "the plate follows z_in + zdot_in*s over each step, blended to stay continuous)",
+        "(fmpy input table, no input derivatives; fmpy 0.3.32's set_input_derivatives only "
+        "works with 9 inputs): the plate is the default quintic Hermite extrapolation of the "
+        "samples",
         dict(
             start_values={"shaker_mode": 2, "Omega": 1.75, "zdot_in": 0.07},
+            stop_time=100.0,
+            output_interval=0.05,
+            input=sinusoid_input(1.75, 0.07, 100.0, 0.05),
+        ),
+    ),
+    "external_shaker_taylor": (
+        "the external_shaker inputs with plate_reconstruction = taylor (first order: "
+        "z_in + zdot_in*s over each step, blended to stay continuous); its reference is the "
+        "external_shaker result from before the Hermite scheme, unchanged",
+        dict(
+            start_values={"shaker_mode": 2, "Omega": 1.75, "zdot_in": 0.07,
+                          "plate_reconstruction": 1},
             stop_time=100.0,
             output_interval=0.05,
             input=sinusoid_input(1.75, 0.07, 100.0, 0.05),

@@ -1,0 +1,364 @@
+//! A plate rebuilt from samples of its position and velocity `(z, ż)` taken at known instants
+//! (a co-simulation host's communication points), for the step that follows the newest sample.
+//!
+//! The piece over `[t_k, t_k + h]` is the Hermite polynomial through the newest samples — at most
+//! [`MAX_SAMPLES`] of them, degree `2m − 1 ≤ 5` for `m` samples — extrapolated over the step,
+//! plus a cubic blend that starts it exactly at the plate's current position and velocity and
+//! vanishes (with its slope) at the step's end. For a smooth plate sampled every `h` the
+//! extrapolation is off by `≈ h⁶ |z⁽⁶⁾| / 20` in position, `O(h⁵)` in velocity and `O(h⁴)` in
+//! acceleration, and the mismatch the blend removes is of the same size, so the plate's
+//! acceleration (which decides sticking and release through the contact force) converges too.
+//!
+//! Rules for samples that do not come from a smooth motion (all of them keep the plate continuous
+//! in position and velocity, and the core detects every contact with the moving plate, so the
+//! plate never passes through the mass):
+//! - Two consecutive samples are *joined* when the position change agrees with the trapezoidal
+//!   integral of the velocities: `|Δz − h(ż₀ + ż₁)/2| ≤ ¼ h (|ż₀ + ż₁|/2 + |Δż|)` plus a few
+//!   ulps of `z` (a smooth motion misses by `h³|z‴|/12`). A sample not joined to its predecessor
+//!   (a step in `z`, noise larger than the motion over one step) starts a new history: the
+//!   piece is then `z_k + ż_k s`, and the blend carries the plate to it within the step.
+//! - An older sample is used only while its spacing to the next one is within `[h/4, 4h]` of
+//!   the coming step `h`, so that nearly coincident instants (a 1e-9 s step before a 0.01 s
+//!   one) cannot amplify rounding into the higher coefficients.
+//! - When the blend does not fit into doubles (a step shorter than about `1e-100` time units),
+//!   only the start position and velocity are imposed and the mismatch is left to the next step.
+
+use crate::params::ParamError;
+use crate::shaker::{PolyPiece, MAX_POLY_DEGREE};
+use crate::time::Instant;
+
+/// Most samples one piece is built from (degree `2·3 − 1 = 5 = MAX_POLY_DEGREE`).
+pub const MAX_SAMPLES: usize = MAX_POLY_DEGREE.div_ceil(2);
+
+/// Plate position and velocity at an instant (nondimensional).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Sample {
+    /// Instant of the sample.
+    pub t: Instant,
+    /// Plate position.
+    pub z: f64,
+    /// Plate velocity.
+    pub zdot: f64,
+}
+
+/// The newest samples of a sampled plate, oldest first; `joined[i]` tells whether sample `i`
+/// continues sample `i − 1` smoothly (see the module documentation).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub struct SampleHistory {
+    samples: [Option<(Sample, bool)>; MAX_SAMPLES],
+}
+
+/// Why a sample was refused.
+fn refuse(name: &'static str, value: f64, rule: &'static str) -> ParamError {
+    ParamError { name, value, rule }
+}
+
+impl SampleHistory {
+    /// An empty history.
+    pub fn new() -> Self {
+        Self::default()
+    }
+
+    /// A history from saved entries `(sample, joined)`, oldest first; `None` unless the
+    /// entries are at most [`MAX_SAMPLES`], finite, strictly increasing in time, and the oldest
+    /// is not marked joined.
+    pub fn from_entries(entries: &[(Sample, bool)]) -> Option<Self> {
+        if entries.len() > MAX_SAMPLES {
+            return None;
+        }
+        let finite = entries
+            .iter()
+            .all(|(s, _)| s.z.is_finite() && s.zdot.is_finite());
+        let increasing = entries.windows(2).all(|w| w[1].0.t > w[0].0.t);
+        if !finite || !increasing || entries.first().is_some_and(|e| e.1) {
+            return None;
+        }
+        let mut h = Self::new();
+        for (slot, e) in h.samples.iter_mut().zip(entries) {
+            *slot = Some(*e);
+        }
+        Some(h)
+    }
+
+    /// The stored samples with their `joined` flags, oldest first.
+    pub fn entries(&self) -> impl Iterator<Item = (Sample, bool)> + '_ {
+        self.samples.iter().flatten().copied()
+    }
+
+    /// The newest sample.
+    pub fn newest(&self) -> Option<Sample> {
+        self.entries().last().map(|e| e.0)
+    }
+
+    /// Adds a sample after the newest one (the oldest beyond [`MAX_SAMPLES`] is dropped).
+    pub fn push(&mut self, s: Sample) -> Result<(), ParamError> {
+        if !s.z.is_finite() {
+            return Err(refuse("plate_sample_z", s.z, "must be finite"));
+        }
+        if !s.zdot.is_finite() {
+            return Err(refuse("plate_sample_zdot", s.zdot, "must be finite"));
+        }
+        let joined = match self.newest() {
+            Some(prev) => {
+                let h = s.t.since(prev.t);
+                if h.is_nan() || h <= 0.0 {
+                    return Err(refuse(
+                        "plate_sample_time",
+                        s.t.to_f64(),
+                        "must be after the previous sample",
+                    ));
+                }
+                joins(&prev, &s, h)
+            }
+            None => false,
+        };
+        let n = self.entries().count();
+        if n == MAX_SAMPLES {
+            self.samples.rotate_left(1);
+            self.samples[MAX_SAMPLES - 1] = None;
+        }
+        let slot = n.min(MAX_SAMPLES - 1);
+        self.samples[slot] = Some((s, joined));
+        // The oldest kept sample starts the history.
+        if let Some(first) = self.samples[0].as_mut() {
+            first.1 = false;
+        }
+        Ok(())
+    }
+
+    /// The samples a piece ending at `end` uses, newest first: the newest one, then older ones
+    /// while they are joined and spaced within `[h/4, 4h]`, `h = end − newest`.
+    fn nodes(&self, end: Instant) -> Vec<Sample> {
+        let all: Vec<(Sample, bool)> = self.entries().collect();
+        let Some(&(newest, _)) = all.last() else {
+            return Vec::new();
+        };
+        let h = end.since(newest.t);
+        let mut out = vec![newest];
+        for i in (1..all.len()).rev() {
+            let (newer, joined) = all[i];
+            let older = all[i - 1].0;
+            let spacing = newer.t.since(older.t);
+            if !(joined && spacing >= 0.25 * h && spacing <= 4.0 * h) {
+                break;
+            }
+            out.push(older);
+        }
+        out
+    }
+
+    /// The plate over `[newest sample, end]`, starting at the plate's current position and
+    /// velocity `now = (z, ż)` at the newest sample's instant.
+    pub fn piece(&self, end: Instant, now: (f64, f64)) -> Result<PolyPiece, ParamError> {
+        let nodes = self.nodes(end);
+        let Some(first) = nodes.first() else {
+            return Err(refuse(
+                "plate_samples",
+                0.0,
+                "at least one sample is needed",
+            ));
+        };
+        let start = first.t;
+        let h = end.since(start);
+        if h.is_nan() || h <= 0.0 {
+            return Err(refuse(
+                "plate_piece_length",
+                h,
+                "end must be after the newest sample",
+            ));
+        }
+        let mut c = hermite(&nodes, start);
+        let (z_now, zd_now) = now;
+        let (d0, d1) = (z_now - c[0], zd_now - c[1]);
+        // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
+        let c2 = c[2] - 3.0 * d0 / (h * h) - 2.0 * d1 / h;
+        let c3 = c[3] + 2.0 * d0 / (h * h * h) + d1 / (h * h);
+        if c2.is_finite() && c3.is_finite() {
+            (c[2], c[3]) = (c2, c3);
+        }
+        // Exactly where the plate is (`c0 + δ0` may round away from it).
+        (c[0], c[1]) = (z_now, zd_now);
+        PolyPiece::new(start, end, &c)
+    }
+}
+
+/// Whether `b` continues `a` smoothly, `h = b.t − a.t > 0` (see the module documentation).
+fn joins(a: &Sample, b: &Sample, h: f64) -> bool {
+    let sum = a.zdot + b.zdot;
+    let defect = (b.z - a.z - 0.5 * h * sum).abs();
+    let scale = h * (0.5 * sum.abs() + (b.zdot - a.zdot).abs());
+    let ulps = 16.0 * f64::EPSILON * a.z.abs().max(b.z.abs());
+    defect <= 0.25 * scale + ulps
+}
+
+/// Monomial coefficients in `s = τ − origin` of the Hermite polynomial through `(z, ż)` at
+/// each node (degree `2·nodes − 1`), by divided differences on doubled nodes.
+fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
+    let n = 2 * nodes.len();
+    let mut x = [0.0; MAX_POLY_DEGREE + 1];
+    let mut q = [0.0; MAX_POLY_DEGREE + 1];
+    for (i, s) in nodes.iter().enumerate() {
+        let xi = s.t.since(origin);
+        x[2 * i] = xi;
+        x[2 * i + 1] = xi;
+        q[2 * i] = s.z;
+        q[2 * i + 1] = s.z;
+    }
+    // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i].
+    let mut dz = [0.0; MAX_POLY_DEGREE + 1];
+    for (i, s) in nodes.iter().enumerate() {
+        dz[2 * i + 1] = s.zdot;
+    }
+    for j in 1..n {
+        for i in (j..n).rev() {
+            q[i] = if j == 1 && i % 2 == 1 {
+                dz[i]
+            } else {
+                (q[i] - q[i - 1]) / (x[i] - x[i - j])
+            };
+        }
+    }
+    // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
+    let mut c = [0.0; MAX_POLY_DEGREE + 1];
+    c[0] = q[n - 1];
+    for j in (0..n - 1).rev() {
+        for k in (1..n).rev() {
+            c[k] = c[k - 1] - x[j] * c[k];
+        }
+        c[0] = q[j] - x[j] * c[0];
+    }
+    c
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::shaker::PlateMotion;
+
+    fn sine(t: f64) -> Sample {
+        Sample {
+            t: Instant::new(t),
+            z: 0.04 * (1.75 * t).sin(),
+            zdot: 0.07 * (1.75 * t).cos(),
+        }
+    }
+
+    #[test]
+    fn hermite_reproduces_a_quintic() {
+        let p = |t: f64| {
+            0.3 - 0.2 * t + 0.5 * t * t + 0.1 * t.powi(3) - 0.05 * t.powi(4) + 0.02 * t.powi(5)
+        };
+        let dp = |t: f64| -0.2 + t + 0.3 * t * t - 0.2 * t.powi(3) + 0.1 * t.powi(4);
+        let nodes: Vec<Sample> = [2.0, 1.5, 1.0]
+            .iter()
+            .map(|&t| Sample {
+                t: Instant::new(t),
+                z: p(t),
+                zdot: dp(t),
+            })
+            .collect();
+        let c = hermite(&nodes, Instant::new(2.0));
+        // Taylor coefficients of p at t = 2.
+        let mut out = [0.0; 6];
+        PlateMotion::from(
+            PolyPiece::new(
+                Instant::new(0.0),
+                Instant::new(9.0),
+                &[0.3, -0.2, 0.5, 0.1, -0.05, 0.02],
+            )
+            .unwrap(),
+        )
+        .series(Instant::new(2.0), &mut out);
+        for k in 0..6 {
+            assert!(
+                (c[k] - out[k]).abs() < 1e-12 * out[k].abs().max(1.0),
+                "{k}: {} vs {}",
+                c[k],
+                out[k]
+            );
+        }
+    }
+
+    #[test]
+    fn extrapolation_error_is_sixth_order() {
+        let err = |h: f64| {
+            let mut hist = SampleHistory::new();
+            for k in 0..3 {
+                hist.push(sine(1.0 + k as f64 * h)).unwrap();
+            }
+            let s = sine(1.0 + 2.0 * h);
+            let p = PlateMotion::from(
+                hist.piece(Instant::new(1.0 + 3.0 * h), (s.z, s.zdot))
+                    .unwrap(),
+            );
+            let want = sine(1.0 + 3.0 * h);
+            (p.motion(Instant::new(1.0 + 3.0 * h)).0 - want.z).abs()
+        };
+        let (e1, e2) = (err(0.2), err(0.1));
+        let order = (e1 / e2).log2();
+        assert!(
+            (5.5..6.6).contains(&order),
+            "order {order} ({e1:e}, {e2:e})"
+        );
+        // Bound of the module docs: h⁶ |z⁽⁶⁾| / 20 with |z⁽⁶⁾| ≤ 0.07·1.75⁵.
+        assert!(e2 <= 0.1f64.powi(6) * 0.07 * 1.75f64.powi(5) / 20.0);
+    }
+
+    #[test]
+    fn piece_starts_at_the_plate_and_ends_on_the_extrapolation() {
+        let mut hist = SampleHistory::new();
+        for k in 0..3 {
+            hist.push(sine(k as f64 * 0.1)).unwrap();
+        }
+        let now = (0.0101, 0.05);
+        let end = Instant::new(0.3);
+        let piece = hist.piece(end, now).unwrap();
+        let p = PlateMotion::from(piece);
+        let (z0, zd0, _) = p.motion(Instant::new(0.2));
+        assert_eq!((z0, zd0), now);
+        let bare = PlateMotion::from(hist.piece(end, (sine(0.2).z, sine(0.2).zdot)).unwrap());
+        let (a, b) = (p.motion(end), bare.motion(end));
+        assert!(
+            (a.0 - b.0).abs() < 1e-15 && (a.1 - b.1).abs() < 1e-14,
+            "{a:?} {b:?}"
+        );
+    }
+
+    #[test]
+    fn a_jump_starts_a_new_history_and_close_samples_are_skipped() {
+        let mut hist = SampleHistory::new();
+        hist.push(sine(0.0)).unwrap();
+        hist.push(sine(0.1)).unwrap();
+        assert_eq!(hist.nodes(Instant::new(0.2)).len(), 2);
+        let mut jump = sine(0.2);
+        jump.z += 0.5;
+        hist.push(jump).unwrap();
+        assert_eq!(hist.nodes(Instant::new(0.3)).len(), 1);
+        // Spacing 0.1 is outside [h/4, 4h] for h = 1e-3 and for h = 1.
+        let mut h2 = SampleHistory::new();
+        h2.push(sine(0.0)).unwrap();
+        h2.push(sine(0.1)).unwrap();
+        assert_eq!(h2.nodes(Instant::new(0.101)).len(), 1);
+        assert_eq!(h2.nodes(Instant::new(1.1)).len(), 1);
+        assert!(h2.push(sine(0.1)).is_err());
+        let mut nan = sine(0.3);
+        nan.zdot = f64::NAN;
+        assert!(h2.push(nan).is_err());
+    }
+
+    #[test]
+    fn saved_entries_round_trip_and_bad_ones_are_refused() {
+        let mut hist = SampleHistory::new();
+        for k in 0..5 {
+            hist.push(sine(k as f64 * 0.1)).unwrap();
+        }
+        let e: Vec<_> = hist.entries().collect();
+        assert_eq!(e.len(), MAX_SAMPLES);
+        assert!(!e[0].1 && e[1].1 && e[2].1);
+        assert_eq!(SampleHistory::from_entries(&e), Some(hist));
+        let mut swapped = e.clone();
+        swapped.swap(1, 2);
+        assert_eq!(SampleHistory::from_entries(&swapped), None);
+        assert_eq!(SampleHistory::from_entries(&e[1..]), None); // oldest marked joined
+    }
+}
