@@ -399,6 +399,42 @@ static double timed(double t_end, double h, int reps, int read) {
     return best;
 }
 
+/* Wall time of a run over [0, t_end] with steps of size h in which the baseline sinusoid is
+ * set through z_in, zdot_in before each step (external mode, sampled inputs, no derivatives)
+ * or, with external = 0, set as the same two inputs of the internal mode (ignored there), so
+ * both runs make the same calls; best of `reps`. */
+static double timed_inputs(double t_end, double h, int reps, int external) {
+    const double omega = 1.75, v = 0.07;
+    fmi2ValueReference in[2] = {vr("z_in"), vr("zdot_in")}, mode = vr("shaker_mode");
+    double best = INFINITY;
+    for (int r = 0; r < reps; r++) {
+        fmi2Component c = instantiate(fmi2False);
+        fmi2Integer m = external ? 2 : 1;
+        fmi2Real start[2] = {0.0, v};
+        if (!c || F.fmi2SetupExperiment(c, fmi2False, 0, 0.0, fmi2False, 0) != fmi2OK ||
+            F.fmi2SetInteger(c, &mode, 1, &m) != fmi2OK || F.fmi2SetReal(c, in, 2, start) != fmi2OK ||
+            F.fmi2EnterInitializationMode(c) != fmi2OK || F.fmi2ExitInitializationMode(c) != fmi2OK) {
+            fprintf(stderr, "bench: cannot start the external-mode instance\n");
+            exit(1);
+        }
+        long n = (long)(t_end / h + 0.5);
+        double t0 = now(), t = 0.0;
+        for (long k = 1; k <= n; k++) {
+            fmi2Real z[2] = {v / omega * sin(omega * t), v * cos(omega * t)};
+            double next = (double)k * h;
+            if (F.fmi2SetReal(c, in, 2, z) != fmi2OK || F.fmi2DoStep(c, t, next - t, fmi2True) != fmi2OK) {
+                fprintf(stderr, "bench: step failed at t = %g\n", t);
+                exit(1);
+            }
+            t = next;
+        }
+        double dt = now() - t0;
+        best = dt < best ? dt : best;
+        F.fmi2FreeInstance(c);
+    }
+    return best;
+}
+
 static void bench(void) {
     const double t_end = 1000.0, h = 0.01;
     timed(t_end, h, 1, 0); /* warm up */
@@ -411,6 +447,12 @@ static void bench(void) {
            steps, small * 1e3, small / (double)steps * 1e9, small / big);
     printf("bench: h=%g + fmi2GetReal(x, v) each step: %.3f ms, %.1f ns per step, ratio %.2f\n", h,
            reading * 1e3, reading / (double)steps * 1e9, reading / big);
+    double internal = timed_inputs(t_end, h, 7, 0), sampled = timed_inputs(t_end, h, 7, 1);
+    printf("bench: h=%g + fmi2SetReal(z_in, zdot_in) each step, internal mode: %.3f ms, %.1f ns per step\n",
+           h, internal * 1e3, internal / (double)steps * 1e9);
+    printf("bench: h=%g sampled inputs, external mode (Hermite plate): %.3f ms, %.1f ns per step, "
+           "ratio to internal %.2f\n",
+           h, sampled * 1e3, sampled / (double)steps * 1e9, sampled / internal);
 }
 
 int main(int argc, char **argv) {
