@@ -851,7 +851,8 @@ fn impulse_of(events: &[Event]) -> f64 {
         .iter()
         .filter_map(Event::impact)
         .map(|i| i.v_before - i.v_after)
-        .sum()
+        // From +0 (`sum` starts at −0): a step without impacts reports 0 whichever path it took.
+        .fold(0.0, |a, b| a + b)
 }
 
 /// Counts what an advance computes, stopping at the first event.

@@ -183,7 +183,6 @@ impl Snapshot {
             let (a, b, c, d, e, f) = m.phase_ref;
             [a, b, c, d, e, f].iter().for_each(|&v| w.f64(v));
             w.pair(m.applied);
-            w.f64(m.time);
             w.u8(m.history.len() as u8);
             for (s, joined) in &m.history {
                 w.pair(s.t.parts());
@@ -191,6 +190,8 @@ impl Snapshot {
                 w.u8(u8::from(*joined));
             }
             w.f64(m.impulse);
+            // Last, so that it stays at a fixed distance from the end of the buffer.
+            w.f64(m.time);
         });
         let total = (w.0.len() + 8) as u64;
         w.0[12..20].copy_from_slice(&total.to_le_bytes());
@@ -255,9 +256,9 @@ impl Snapshot {
                     checkpoint: get_checkpoint(r)?,
                     phase_ref: (r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?),
                     applied: r.pair()?,
-                    time: r.f64()?,
                     history: get_history(r)?,
                     impulse: r.f64()?,
+                    time: r.f64()?,
                 })
             })?,
         };

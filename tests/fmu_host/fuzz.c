@@ -573,7 +573,7 @@ static fmi2ValueReference any_vr(int kind, int settable_only, int *bad) {
     int r = pick(100);
     if (r < 8) {
         *bad = 1;
-        static const fmi2ValueReference unknown[] = {28, 29, 100, 777, 0x7fffffff, 0xffffffffu};
+        static const fmi2ValueReference unknown[] = {4096, 4097, 100000, 777777, 0x7fffffff, 0xffffffffu};
         return unknown[pick(6)];
     }
     if (r < 25) return vars[pick(nv)].vr;
