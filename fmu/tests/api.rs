@@ -1035,3 +1035,58 @@ fn a_state_driven_far_out_of_scope_ends_in_a_discard_not_a_hang() {
     assert_eq!(s, fmi2Discard);
     assert!(g.messages().join("\n").contains("integration steps"));
 }
+
+/// `plate_impulse` is `mass·Σ(v_before − v_after)` over the impacts logged in each step (SI: the
+/// logged velocities are m/s), 0 in steps without impacts; here with units other than 1 and a
+/// chatter case with many impacts per step.
+#[test]
+fn plate_impulse_is_the_momentum_of_the_steps_impacts() {
+    let mass = 2.5;
+    let mut f = Fmu::started(&[
+        (var::Omega, 0.2),
+        (var::V, 0.05),
+        (var::mass, mass),
+        (var::omega0, 3.0),
+        (var::delta_x, 0.5),
+    ]);
+    let impulse_logged = |lines: &[String]| -> (usize, f64) {
+        let mut n = 0;
+        let mut sum = 0.0;
+        for m in lines.iter().filter(|m| m.starts_with("impact ")) {
+            let field = |key: &str| -> f64 {
+                let rest = &m[m.find(key).unwrap() + key.len()..];
+                rest.split_whitespace().next().unwrap().parse().unwrap()
+            };
+            n += 1;
+            sum += mass * (field("v_before=") - field("v_after="));
+        }
+        (n, sum)
+    };
+    // Initialization: impact 0 at the start time.
+    let (n0, want0) = impulse_logged(&f.messages());
+    assert_eq!(n0, 1);
+    assert_eq!(f.real(var::plate_impulse), want0);
+    assert!(want0 < 0.0, "the plate thrown the mass up is pushed down");
+    let (mut with, mut without) = (0, 0);
+    for _ in 0..120 {
+        let before = f.messages().len();
+        assert_eq!(f.step(0.25), fmi2OK);
+        let (n, want) = impulse_logged(&f.messages()[before..]);
+        let got = f.real(var::plate_impulse);
+        assert!(
+            (got - want).abs() <= 1e-12 * want.abs(),
+            "t = {}: {got} vs {want} from {n} impacts",
+            f.t
+        );
+        if n == 0 {
+            assert_eq!(got.to_bits(), 0.0f64.to_bits());
+            without += 1;
+        } else {
+            with += 1;
+        }
+    }
+    assert!(
+        with > 5 && without > 5,
+        "{with} steps with impacts, {without} without"
+    );
+}
