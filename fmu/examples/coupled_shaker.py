@@ -37,8 +37,9 @@ Run ``python fmu/examples/coupled_shaker.py --help`` for the command line; ``run
 ``momentum_balance`` are the function API (used by ``tests/fmu/test_coupled.py``).
 """
 import argparse
+import contextlib
 import math
-from ctypes import byref
+from ctypes import CFUNCTYPE, c_char_p, c_int, c_void_p, cast
 import pathlib
 import shutil
 import tempfile
@@ -98,6 +99,10 @@ class Armature:
         self.state[1] += impulse / self.M
 
 
+#: The logger as this FMU calls it: the format is always "%s" and the message follows it.
+_LOGGER_TYPE = CFUNCTYPE(None, c_void_p, c_char_p, c_int, c_char_p, c_char_p, c_char_p)
+
+
 class _Fmu:
     """One FMU instance over fmpy's FMU2Slave, with an optional message log."""
 
@@ -111,14 +116,16 @@ class _Fmu:
         callbacks = None
         if log_events:
             callbacks = fmi2CallbackFunctions()
-            callbacks.logger = fmi2CallbackLoggerTYPE(self._log)
+            # This FMU always logs `logger(env, name, status, category, "%s", message)`, so the
+            # message is the sixth argument. (fmpy's `addLoggerProxy`, which formats any variadic
+            # message, keeps one process-wide pointer to the last logger it wrapped: once this
+            # instance's callback is garbage-collected, every later fmpy instance that logs
+            # through the proxy would call freed memory.)
+            self._logger = _LOGGER_TYPE(self._log)
+            callbacks.logger = cast(self._logger, fmi2CallbackLoggerTYPE)
             # fmpy's default allocator pair (FMI 2.0 requires them).
             callbacks.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
             callbacks.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
-            # The FMU logs `logger(env, name, status, category, "%s", message)`: fmpy's proxy
-            # formats the variadic message before our Python callback sees it.
-            from fmpy.logging import addLoggerProxy
-            addLoggerProxy(byref(callbacks))
         self._callbacks = callbacks  # keeps the ctypes objects alive
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
                              modelIdentifier=md.coSimulation.modelIdentifier,
@@ -127,7 +134,7 @@ class _Fmu:
         if log_events:
             self.fmu.setDebugLogging(True, ["logEvents"])
 
-    def _log(self, env, name, status, category, message):
+    def _log(self, env, name, status, category, fmt, message):
         self.messages.append((self.step_index, message.decode(errors="replace")))
 
     def set(self, **values):
@@ -153,10 +160,38 @@ class _Fmu:
         self.fmu.freeInstance()
 
 
+@contextlib.contextmanager
+def _instance(fmu_path, unzipped, log_events):
+    """An instance of the FMU at ``fmu_path``, from ``unzipped`` or, when it is None, from a
+    temporary extraction removed afterwards; terminated and freed on exit."""
+    tmp = None
+    if unzipped is None:
+        tmp = tempfile.mkdtemp(prefix="coupled_shaker_")
+        extract(str(fmu_path), tmp)
+        unzipped = tmp
+    fmu = _Fmu(str(fmu_path), unzipped, log_events)
+    try:
+        yield fmu
+    finally:
+        fmu.close()
+        if tmp:
+            shutil.rmtree(tmp, ignore_errors=True)
+
+
+def _fmu_drive(fmu, Omega, V, params):
+    """The FMU's nondimensional ``Omega`` (ratio to omega0) and ``V`` (unit omega0 delta_x) of
+    the SI drive ``Omega`` (rad/s), ``V`` (m/s)."""
+    params = params or {}
+    w0 = params.get("omega0", float(fmu.starts["omega0"]))
+    dx = params.get("delta_x", float(fmu.starts["delta_x"]))
+    return Omega / w0, V / (w0 * dx)
+
+
 def run(M, C, K, h, t_end, feedback=True, fmu_path=DEFAULT_FMU, Omega=1.75, V=0.07,
         params=None, impulse_gain=1.0, log_events=False, unzipped=None):
     """Co-simulates the FMU (external mode) with the armature ``(M, C, K)`` from 0 to ``t_end``
-    with communication step ``h`` (s).
+    with communication step ``h`` (s); the armature alone would follow
+    ``y = (V/Omega) sin(Omega t)`` (``Omega`` in rad/s, ``V`` in m/s).
 
     ``params``: further FMU start values (e.g. ``{"zeta": 0.0}``). ``impulse_gain`` multiplies
     the fed-back impulse (1: physical; -1 feeds it with the wrong sign, for checking tests).
@@ -172,16 +207,11 @@ def run(M, C, K, h, t_end, feedback=True, fmu_path=DEFAULT_FMU, Omega=1.75, V=0.
     """
     n = max(1, round(t_end / h))
     t = np.linspace(0.0, n * h, n + 1)
-    fmu_path = str(fmu_path)
-    tmp = None
-    if unzipped is None:
-        tmp = tempfile.mkdtemp(prefix="coupled_shaker_")
-        extract(fmu_path, tmp)
-        unzipped = tmp
     arm = Armature(M, C, K, Omega, V)
-    fmu = _Fmu(fmu_path, unzipped, log_events)
-    try:
-        start = {"shaker_mode": 2, "Omega": Omega, "z_in": 0.0, "zdot_in": V}
+    with _instance(fmu_path, unzipped, log_events) as fmu:
+        # The FMU's Omega only sets the reference of last_impact_phase in external mode.
+        start = {"shaker_mode": 2, "Omega": _fmu_drive(fmu, Omega, V, params)[0], "z_in": 0.0,
+                 "zdot_in": V}
         start.update(params or {})
         fmu.fmu.setupExperiment(startTime=0.0)
         fmu.set(**start)
@@ -207,10 +237,6 @@ def run(M, C, K, h, t_end, feedback=True, fmu_path=DEFAULT_FMU, Omega=1.75, V=0.
             fmu.fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
             arm.advance(t[k], t[k + 1])
             record(k + 1)
-    finally:
-        fmu.close()
-        if tmp:
-            shutil.rmtree(tmp, ignore_errors=True)
     result = dict(out, t=t, y=y, ydot=ydot, ydot_before=ydot_before, I_armature=i_arm,
                   M=M, C=C, K=K, Omega=Omega, V=V, h=h, feedback=feedback,
                   messages=fmu.messages, **consts)
@@ -238,7 +264,7 @@ def momentum_balance(r):
     x, v, t = r["x"], r["v"], r["t"]
     f_spring = -m * w0 * w0 * dx * force_term(x / dx)
     i_spring = float(np.sum(0.5 * (f_spring[1:] + f_spring[:-1]) * np.diff(t)))
-    i_damping = -2.0 * m * zeta * w0 * (x[-1] - x[0])
+    i_damping = -2.0 * m * zeta * w0 * (x[-1] - x[0]) + 0.0  # + 0.0: no -0.0 when zeta = 0
     p0 = r["M"] * r["V"] + m * r["v0"]
     p1 = r["M"] * r["ydot"][-1] + m * v[-1]
     i_arm = float(r["I_armature"][-1])
@@ -248,19 +274,14 @@ def momentum_balance(r):
 
 def internal_reference(t_end, h, fmu_path=DEFAULT_FMU, Omega=1.75, V=0.07, params=None,
                        unzipped=None):
-    """The FMU's own sinusoid (internal mode) at the communication points: (t, x)."""
+    """The FMU's own sinusoid (internal mode, plate ``(V/Omega) sin(Omega t)``, SI ``Omega``,
+    ``V`` as in ``run``) at the communication points: (t, x)."""
     n = max(1, round(t_end / h))
     t = np.linspace(0.0, n * h, n + 1)
-    fmu_path = str(fmu_path)
-    tmp = None
-    if unzipped is None:
-        tmp = tempfile.mkdtemp(prefix="coupled_shaker_")
-        extract(fmu_path, tmp)
-        unzipped = tmp
-    fmu = _Fmu(fmu_path, unzipped, False)
-    try:
+    with _instance(fmu_path, unzipped, False) as fmu:
         fmu.fmu.setupExperiment(startTime=0.0)
-        fmu.set(Omega=Omega, V=V, **(params or {}))
+        w, v = _fmu_drive(fmu, Omega, V, params)
+        fmu.set(Omega=w, V=v, **(params or {}))
         fmu.fmu.enterInitializationMode()
         fmu.fmu.exitInitializationMode()
         x = np.empty(n + 1)
@@ -268,10 +289,6 @@ def internal_reference(t_end, h, fmu_path=DEFAULT_FMU, Omega=1.75, V=0.07, param
         for k in range(n):
             fmu.fmu.doStep(currentCommunicationPoint=t[k], communicationStepSize=t[k + 1] - t[k])
             x[k + 1] = fmu.get(("x",))[0]
-    finally:
-        fmu.close()
-        if tmp:
-            shutil.rmtree(tmp, ignore_errors=True)
     return t, x
 
 
@@ -308,6 +325,10 @@ def main(argv=None):
         "step (explicit coupling, one-step lag). SI units throughout; the FMU's defaults "
         "(omega0 = 1 rad/s, delta_x = 1 m, mass = 1 kg) make them the paper's nondimensional "
         "ones.",
+        epilog="examples: light armature with feedback and a plot: --M 2 --plot coupled.png; "
+        "heavy armature against the internal sinusoid: --M 1e9 --h 0.05 --t-end 100 --compare. "
+        "Printed: impacts, impulses, final state, the momentum balance (feedback on) and the "
+        "wall time.",
         formatter_class=argparse.ArgumentDefaultsHelpFormatter)
     p.add_argument("--fmu", default=str(DEFAULT_FMU), help="path of bistable_impact.fmu")
     p.add_argument("--M", type=float, default=2.0, help="armature mass (kg)")
@@ -317,13 +338,15 @@ def main(argv=None):
                    help="armature damping ratio C/(2 sqrt(K M)); sets C unless --C given")
     p.add_argument("--K", type=float, help="armature stiffness (N/m)")
     p.add_argument("--C", type=float, help="armature damping (N s/m)")
-    p.add_argument("--Omega", type=float, default=1.75, help="drive frequency (rad/s)")
+    p.add_argument("--Omega", type=float, default=1.75,
+                   help="drive frequency (rad/s; the FMU's Omega is this over omega0)")
     p.add_argument("--V", type=float, default=0.07,
                    help="velocity amplitude of the prescribed armature motion (m/s)")
     p.add_argument("--h", type=float, default=0.01, help="communication step (s)")
     p.add_argument("--t-end", type=float, default=60.0, help="end time (s)")
-    p.add_argument("--no-feedback", dest="feedback", action="store_false",
-                   help="do not apply the impacts' impulses to the armature (one-way coupling)")
+    p.add_argument("--feedback", action=argparse.BooleanOptionalAction, default=True,
+                   help="apply each step's plate_impulse to the armature (two-way coupling); "
+                   "--no-feedback: one-way, the armature follows the prescribed sinusoid")
     p.add_argument("--zeta", type=float, help="damping ratio of the mass (FMU default 0.02)")
     p.add_argument("--e", type=float, help="coefficient of restitution (FMU default 0.85)")
     p.add_argument("--compare", action="store_true",
@@ -352,7 +375,8 @@ def main(argv=None):
         print(f"momentum: P(0-)={b['P0']:.12g} P(end)={b['P1']:.12g} external impulses: "
               f"armature {b['I_armature']:.12g} spring {b['I_spring']:.12g} damping "
               f"{b['I_damping']:.12g}; "
-              f"balance error {b['error']:.3g} N s")
+              f"balance error {b['error']:.3g} N s "
+              f"({b['error'] / max(abs(b['P0']), abs(b['P1'])):.2g} of the momentum)")
     if a.compare:
         _, x_int = internal_reference(r["t"][-1], a.h, a.fmu, a.Omega, a.V, params)
         print(f"max |x - x_internal| = {np.max(np.abs(r['x'] - x_int)):.3g} m")
