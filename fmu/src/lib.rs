@@ -9,5 +9,6 @@ pub mod exports;
 pub mod fmi2;
 pub mod instance;
 pub mod md;
+pub mod me;
 pub mod model;
 pub mod state;
