@@ -444,7 +444,8 @@ impl Instance {
             Lifecycle::StepComplete | Lifecycle::EventMode | Lifecycle::ContinuousTimeMode
         );
         match v.causality {
-            Causality::Output | Causality::Local => Err(format!(
+            Causality::Output => Err(format!("{} is an output and cannot be set", label(i))),
+            Causality::Local => Err(format!(
                 "{} is computed by the FMU and cannot be set",
                 label(i)
             )),

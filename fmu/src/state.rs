@@ -530,6 +530,8 @@ mod tests {
             let mut m = Model::start(&values, &inputs, 0.0, &mut events).unwrap();
             m.step(t_end, &values, &inputs, &mut events).ok().unwrap();
             out.push(Snapshot {
+                interface: Interface::CoSimulation,
+                me: None,
                 lifecycle: Lifecycle::StepComplete,
                 values,
                 inputs,
