@@ -27,7 +27,7 @@
 
 use std::ops::ControlFlow;
 
-use bistable_core::potential::BARRIER;
+use bistable_core::potential::{self, BARRIER};
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Observer, Params, PlateMotion, Simulator,
     Sinusoid, SolverOptions, State, StepView, StickCause, Well,
@@ -256,8 +256,9 @@ impl Me {
     /// range of the shaker.
     pub fn set_time(&mut self, t: f64) -> Result<(), String> {
         let tau = self.scale.tau(t);
-        let slack = 1e-9 * self.s.event_tau.abs().max(1.0);
-        if !tau.is_finite() || tau < self.s.event_tau - slack {
+        // Rounding allowance as for co-simulation communication points: 1e-9 relative, in s.
+        let event = self.scale.time(self.s.event_tau);
+        if !tau.is_finite() || t < event - 1e-9 * event.abs().max(1.0) {
             return Err(format!(
                 "time = {t} s must be finite and not before the last event at {} s",
                 self.scale.time(self.s.event_tau)
@@ -290,8 +291,12 @@ impl Me {
         }
         let sc = &self.scale;
         let (xn, vn) = (xs / sc.dx, vs / (sc.omega0 * sc.dx));
-        if !(xn.is_finite() && vn.is_finite()) {
-            return Err("continuous states out of range after scaling".into());
+        // The energies (outputs, and part of an FMU state) must stay finite.
+        let energies = sc.energy(potential::energy(xn)) + sc.energy(potential::kinetic(vn));
+        if !(xn.is_finite() && vn.is_finite() && energies.is_finite()) {
+            return Err(format!(
+                "continuous states x = {xs} m, v = {vs} m/s give non-finite energies"
+            ));
         }
         self.s.x = xn;
         self.s.v = vn;
@@ -517,7 +522,10 @@ impl Me {
             cause,
             impacts: found.len() as u64,
             last: found.last().copied(),
-            impulse: found.iter().map(|i| i.v_before - i.v_after).sum(),
+            impulse: found
+                .iter()
+                .map(|i| i.v_before - i.v_after)
+                .fold(0.0, |a, b| a + b),
         })
     }
 

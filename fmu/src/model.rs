@@ -480,8 +480,10 @@ impl Model {
         events: &mut Vec<Event>,
     ) -> Result<(), StepFailure> {
         let (tau_end, _, same_plate) = self.plan(t_end, values);
-        self.impulse = 0.0;
+        // The impulse is replaced only by a step that is not refused (a refusal leaves the
+        // model as it was).
         if same_plate && tau_end < self.taylor_end {
+            self.impulse = 0.0;
             self.pending = Some(tau_end);
             self.time = t_end;
             return Ok(());
@@ -513,6 +515,7 @@ impl Model {
         if !moves {
             // A step shorter than the resolution of the core's time (e.g. h = 5e-324 s, or
             // omega0 < 1): nothing moves, only the communication time.
+            self.impulse = 0.0;
             self.time = t_end;
             return Ok(());
         }
@@ -524,6 +527,7 @@ impl Model {
             self.phase_ref,
             self.applied,
             self.history,
+            self.impulse,
         );
         let undo_time = self.time;
         // A refused step leaves the model as it was: everything that can fail comes before the
@@ -639,13 +643,13 @@ impl Model {
     }
 
     /// Back to the state saved before a step (see [`Model::step_core`]).
-    fn undo(&mut self, (cp, phase_ref, applied, history): &Undo) {
+    fn undo(&mut self, (cp, phase_ref, applied, history, impulse): &Undo) {
         if let Ok(sim) = Simulator::from_checkpoint(cp) {
             self.sim = sim;
             self.phase_ref = *phase_ref;
             self.applied = *applied;
             self.history = *history;
-            self.impulse = 0.0;
+            self.impulse = *impulse;
             self.taylor_end = f64::NEG_INFINITY;
             self.pending = None;
         }
@@ -955,8 +959,8 @@ fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
 const MAX_SAVED_STEP: f64 = 64.0;
 
 /// The model at a communication point, to go back to when a step fails: core, phase reference,
-/// `(Ω, V)` in force, plate samples.
-type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory);
+/// `(Ω, V)` in force, plate samples, plate impulse.
+type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory, f64);
 
 /// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they
 /// gave the plate.
@@ -965,7 +969,8 @@ fn impulse_of(events: &[Event]) -> f64 {
         .iter()
         .filter_map(Event::impact)
         .map(|i| i.v_before - i.v_after)
-        .sum()
+        // From +0 (`sum` starts at −0): a step without impacts reports 0 whichever path it took.
+        .fold(0.0, |a, b| a + b)
 }
 
 /// Counts what an advance computes, stopping at the first event.

@@ -62,6 +62,12 @@ void hrefused(fmi2Status s, const char *needle, const char *what);
 
 /* `host test`, Model Exchange part (me.c): the ME driver against co-simulation, illegal calls. */
 void me_tests(void);
+/* The ME driver (me.c): settles an event (fmi2NewDiscreteStates until done, then continuous-time
+ * mode), `*next` the next time event or INFINITY; 0 on success. */
+int me_settle(fmi2Component c, double *next);
+/* The ME driver: continuous-time mode from t0 to t_end with RK4 steps h, indicator sign changes
+ * bisected to 1e-12 s, time event at `next`; `*events` counts event modes. 0 on success. */
+int me_run(fmi2Component c, double t0, double t_end, double h, double next, long *events);
 
 /* `host fuzz` (fuzz.c): arguments after the mode and the two paths. */
 int fuzz_main(const char *seeds, const char *ncalls);

@@ -6,7 +6,7 @@
 
 /* Settles an event (event mode to continuous-time mode); `*next` is the next time event or
  * INFINITY. 0 on success. */
-static int settle(fmi2Component c, double *next) {
+int me_settle(fmi2Component c, double *next) {
     fmi2EventInfo info;
     do {
         if (F.fmi2NewDiscreteStates(c, &info) != fmi2OK) return -1;
@@ -46,9 +46,7 @@ static int crossed(const double a[2], const double b[2]) {
     return (a[0] > 0) != (b[0] > 0) || (a[1] > 0) != (b[1] > 0);
 }
 
-/* Runs an ME instance in continuous-time mode from t0 to t_end with RK4 steps h; `*events`
- * counts the event modes entered. 0 when every call succeeded. */
-static int me_run(fmi2Component c, double t0, double t_end, double h, double next, long *events) {
+int me_run(fmi2Component c, double t0, double t_end, double h, double next, long *events) {
     double t = t0, x[2], x1[2], z0[2], z1[2];
     while (t < t_end) {
         if (F.fmi2GetContinuousStates(c, x, 2) != fmi2OK || indicators(c, t, x, z0)) return -1;
@@ -73,7 +71,7 @@ static int me_run(fmi2Component c, double t0, double t_end, double h, double nex
             F.fmi2CompletedIntegratorStep(c, fmi2True, &enter, &terminate) != fmi2OK)
             return -1;
         if (event || enter || t >= next) {
-            if (F.fmi2EnterEventMode(c) != fmi2OK || settle(c, &next)) return -1;
+            if (F.fmi2EnterEventMode(c) != fmi2OK || me_settle(c, &next)) return -1;
             (*events)++;
         }
     }
@@ -92,7 +90,7 @@ static fmi2Component start(fmi2Type kind, double omega, double v, double *next) 
              F.fmi2SetReal(c, vrs, 2, vals) == fmi2OK &&
              F.fmi2EnterInitializationMode(c) == fmi2OK &&
              F.fmi2ExitInitializationMode(c) == fmi2OK &&
-             (kind == fmi2CoSimulation || settle(c, next) == 0);
+             (kind == fmi2CoSimulation || me_settle(c, next) == 0);
     if (!ok) {
         F.fmi2FreeInstance(c);
         return NULL;
