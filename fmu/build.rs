@@ -4,7 +4,9 @@
 //! Output `$OUT_DIR/model_description.rs`: `GUID`, `MODEL_IDENTIFIER`, the table `VARS` (one
 //! entry per scalar variable, in file order) and, in `mod var`, one `usize` constant per variable
 //! named exactly like it (its position in `VARS`); likewise `CATEGORIES` and `mod cat` for the
-//! log categories. Renaming or removing a variable the Rust code uses is then a compile error.
+//! log categories; `STATES` and `DERIVATIVES` (the continuous states and their derivatives, in
+//! ModelStructure/Derivatives order) and `NUMBER_OF_EVENT_INDICATORS` for Model Exchange.
+//! Renaming or removing a variable the Rust code uses is then a compile error.
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
@@ -69,6 +71,14 @@ fn generate(text: &str) -> Result<String, String> {
     let ident = cs
         .attribute("modelIdentifier")
         .ok_or("no modelIdentifier")?;
+    let me = root
+        .children()
+        .find(|n| n.has_tag_name("ModelExchange"))
+        .ok_or("no ModelExchange element")?;
+    if me.attribute("modelIdentifier") != Some(ident) {
+        return Err("ModelExchange and CoSimulation must share the modelIdentifier".into());
+    }
+    let indicators = num(root, "numberOfEventIndicators", 0.0)?;
 
     // Enumeration types: name -> (min item value, max item value).
     let mut enums = std::collections::HashMap::new();
@@ -92,6 +102,9 @@ fn generate(text: &str) -> Result<String, String> {
     let mut consts = String::new();
     let mut vrs = BTreeSet::new();
     let mut outputs = Vec::new();
+    // (index of the derivative, index of its state), 1-based.
+    let mut derivatives = Vec::new();
+    let mut continuous_reals = BTreeSet::new();
     let vars = root
         .descendants()
         .filter(|n| n.has_tag_name("ScalarVariable"));
@@ -111,6 +124,7 @@ fn generate(text: &str) -> Result<String, String> {
             "parameter" => "Parameter",
             "input" => "Input",
             "output" => "Output",
+            "local" => "Local",
             other => return Err(format!("{name}: causality {other} not handled")),
         };
         if causality == "Output" {
@@ -145,6 +159,16 @@ fn generate(text: &str) -> Result<String, String> {
             return Err(format!("{name}: start {start} outside [{min}, {max}]"));
         }
         let unit = ty.attribute("unit").unwrap_or("");
+        let continuous = v.attribute("variability").unwrap_or("continuous") == "continuous";
+        if kind == "Real" && continuous {
+            continuous_reals.insert(i + 1);
+        }
+        if let Some(d) = ty.attribute("derivative") {
+            let of: usize = d
+                .parse()
+                .map_err(|e| format!("{name}: derivative=\"{d}\": {e}"))?;
+            derivatives.push((i + 1, of));
+        }
         writeln!(
             out,
             "    Var {{ name: {name:?}, vr: {vr}, kind: Kind::{kind}, causality: Causality::{causality}, \
@@ -158,20 +182,55 @@ fn generate(text: &str) -> Result<String, String> {
     }
     writeln!(out, "];").unwrap();
 
-    // Every output must be listed in ModelStructure/Outputs and InitialUnknowns.
-    for section in ["Outputs", "InitialUnknowns"] {
+    // ModelStructure: Outputs lists every output, Derivatives every variable with a
+    // `derivative` attribute (in file order), InitialUnknowns both (ascending, no repeats).
+    // A derivative is of a continuous Real and a state has one derivative.
+    let states: Vec<usize> = derivatives.iter().map(|&(_, of)| of).collect();
+    if let Some(&(d, of)) = derivatives
+        .iter()
+        .find(|&&(d, of)| !continuous_reals.contains(&d) || !continuous_reals.contains(&of))
+    {
+        return Err(format!(
+            "variable {d} is the derivative of {of}: both must be continuous Reals"
+        ));
+    }
+    if states.iter().collect::<BTreeSet<_>>().len() != states.len() {
+        return Err(format!("a state has two derivatives: {derivatives:?}"));
+    }
+    if indicators.fract() != 0.0 || !(0.0..=64.0).contains(&indicators) {
+        return Err(format!("numberOfEventIndicators = {indicators}"));
+    }
+    let ders: Vec<usize> = derivatives.iter().map(|&(d, _)| d).collect();
+    let initial: Vec<usize> = outputs
+        .iter()
+        .chain(&ders)
+        .copied()
+        .collect::<BTreeSet<_>>()
+        .into_iter()
+        .collect();
+    for (section, expected) in [
+        ("Outputs", &outputs),
+        ("Derivatives", &ders),
+        ("InitialUnknowns", &initial),
+    ] {
         let listed: Vec<usize> = root
             .descendants()
             .filter(|n| n.has_tag_name(section))
             .flat_map(|n| n.children().filter(|c| c.has_tag_name("Unknown")))
             .map(|u| num(u, "index", 0.0).map(|x| x as usize))
             .collect::<Result<_, _>>()?;
-        if listed != outputs {
+        if &listed != expected {
             return Err(format!(
-                "ModelStructure/{section} lists {listed:?}, outputs are {outputs:?}"
+                "ModelStructure/{section} lists {listed:?}, expected {expected:?}"
             ));
         }
     }
+    let positions = |v: &[usize]| {
+        v.iter()
+            .map(|i| (i - 1).to_string())
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
 
     let mut cats = String::new();
     let mut cat_consts = String::new();
@@ -192,9 +251,38 @@ fn generate(text: &str) -> Result<String, String> {
     )
     .unwrap();
     writeln!(code, "pub const GUID: &str = {guid:?};").unwrap();
-    writeln!(code, "/// `modelIdentifier` of the CoSimulation element.").unwrap();
+    writeln!(
+        code,
+        "/// `modelIdentifier` of the ModelExchange and CoSimulation elements."
+    )
+    .unwrap();
     writeln!(code, "pub const MODEL_IDENTIFIER: &str = {ident:?};").unwrap();
     code.push_str(&out);
+    writeln!(
+        code,
+        "/// Continuous states (positions in [`VARS`]), in ModelStructure/Derivatives order."
+    )
+    .unwrap();
+    writeln!(
+        code,
+        "pub static STATES: &[usize] = &[{}];",
+        positions(&states)
+    )
+    .unwrap();
+    writeln!(code, "/// Their derivatives (positions in [`VARS`]).").unwrap();
+    writeln!(
+        code,
+        "pub static DERIVATIVES: &[usize] = &[{}];",
+        positions(&ders)
+    )
+    .unwrap();
+    writeln!(code, "/// `numberOfEventIndicators`.").unwrap();
+    writeln!(
+        code,
+        "pub const NUMBER_OF_EVENT_INDICATORS: usize = {};",
+        indicators as usize
+    )
+    .unwrap();
     writeln!(
         code,
         "/// Position of each variable in [`VARS`], named like the variable."

@@ -41,7 +41,7 @@ fmu: setup
 	cd $(FMU_STAGE) && python3 -m zipfile -c ../$(FMU_NAME).fmu modelDescription.xml binaries documentation extra
 	@echo "fmu: $(FMU)"
 
-FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/fuzz.c
+FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/me.c tests/fmu_host/fuzz.c
 $(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h fmu/include/$(FMU_NAME).h
 	mkdir -p $(FMU_DIR)
 	$(CC) -std=gnu11 -O2 -g -Wall -Wextra -Werror -Ifmu/include $(FMU_HOST_SRC) -o $@ -ldl -lm

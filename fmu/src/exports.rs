@@ -1,4 +1,5 @@
-//! The 34 FMI 2.0 common and co-simulation functions with C linkage.
+//! The 44 FMI 2.0 functions with C linkage: 27 common, 7 co-simulation, 10 Model Exchange.
+//! A function of one interface is refused (`fmi2Error`) by an instance of the other.
 //!
 //! # Safety
 //! Callers pass pointers as the FMI 2.0 standard specifies: valid for the lengths given, strings
@@ -13,7 +14,7 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr;
 
 use crate::fmi2::*;
-use crate::instance::{allowed, Instance, Lifecycle, Outcome};
+use crate::instance::{allowed, Instance, Interface, Lifecycle, Outcome};
 use crate::md::{cat, Kind, GUID};
 use crate::state::Snapshot;
 
@@ -49,6 +50,11 @@ fn call(
     let run = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: checked above; only this call uses the instance.
         let inst = unsafe { &mut *inst };
+        if !allowed::provides(mask, inst.interface) {
+            let msg = format!("not provided by a {:?} instance", inst.interface);
+            inst.log_error(func, &msg);
+            return fmi2Error;
+        }
         if !allowed::contains(mask, inst.lifecycle) {
             let msg = format!("not allowed in state {:?}", inst.lifecycle);
             inst.log_error(func, &msg);
@@ -148,8 +154,14 @@ unsafe fn instantiate(
     };
     let given = text(name, "instanceName").unwrap_or_default();
     let cname = CString::new(given.clone()).unwrap_or_default();
+    let interface = match kind {
+        k if k == fmi2ModelExchange => Some(Interface::ModelExchange),
+        k if k == fmi2CoSimulation => Some(Interface::CoSimulation),
+        _ => None,
+    };
     let inst = Instance::new(
         cname,
+        interface.unwrap_or(Interface::CoSimulation),
         f.componentEnvironment,
         f.logger,
         logging_on != fmi2False,
@@ -158,9 +170,9 @@ unsafe fn instantiate(
         if given.is_empty() {
             return Err("instanceName must be a non-empty string".to_string());
         }
-        if kind != fmi2CoSimulation {
+        if interface.is_none() {
             return Err(format!(
-                "fmuType = {kind}: this FMU provides co-simulation only (fmi2CoSimulation = {fmi2CoSimulation})"
+                "fmuType = {kind}: must be fmi2ModelExchange = {fmi2ModelExchange} or fmi2CoSimulation = {fmi2CoSimulation}"
             ));
         }
         let g = text(guid, "fmuGUID")?;
@@ -180,7 +192,7 @@ unsafe fn instantiate(
     }
 }
 
-/// A new co-simulation instance, or NULL (with a logged reason) for a wrong GUID, FMU type,
+/// A new Model Exchange or co-simulation instance, or NULL (with a logged reason) for a wrong GUID, FMU type,
 /// name or NULL callbacks. `fmuResourceLocation` and `visible` are not used.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2Instantiate(
@@ -515,7 +527,7 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
         let slot = out(FMUstate, "FMUstate")?;
         let bytes = array(serializedState.cast::<u8>(), size, "serializedState")?;
         let snap = Snapshot::deserialize(bytes)?;
-        Instance::validate(&snap)?;
+        inst.accept(&snap)?;
         store(inst, slot, snap)
     })
 }
@@ -547,12 +559,17 @@ pub unsafe extern "C" fn fmi2SetRealInputDerivatives(
     order: *const fmi2Integer,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    call(c, "fmi2SetRealInputDerivatives", allowed::SET, |inst| {
-        let vrs = array(vr, nvr, "vr")?;
-        let orders = array(order, nvr, "order")?;
-        let vals = array(value, nvr, "value")?;
-        inst.set_input_derivatives(vrs, orders, vals)
-    })
+    call(
+        c,
+        "fmi2SetRealInputDerivatives",
+        allowed::SET_DERIVATIVES,
+        |inst| {
+            let vrs = array(vr, nvr, "vr")?;
+            let orders = array(order, nvr, "order")?;
+            let vals = array(value, nvr, "value")?;
+            inst.set_input_derivatives(vrs, orders, vals)
+        },
+    )
 }
 
 /// First time derivatives (SI) of `x`, `v`, `z`, `zdot`.
@@ -595,7 +612,7 @@ pub unsafe extern "C" fn fmi2DoStep(
 /// Steps are synchronous: there is never a step to cancel, so this is refused.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2CancelStep(c: fmi2Component) -> fmi2Status {
-    call(c, "fmi2CancelStep", allowed::ANY, |_| {
+    call(c, "fmi2CancelStep", allowed::CANCEL, |_| {
         Err("no asynchronous step is in progress: fmi2DoStep is synchronous".into())
     })
 }
@@ -679,13 +696,164 @@ pub unsafe extern "C" fn fmi2GetStringStatus(
     })
 }
 
+// ---- Model Exchange ----
+
+/// Enters event mode (from continuous-time or event mode).
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterEventMode(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2EnterEventMode", allowed::ENTER_EVENT, |inst| {
+        inst.enter_event_mode()
+    })
+}
+
+/// Settles the events at the current time (impacts, sticking, release, snap-throughs, a due
+/// chatter tail) and reports in `*eventInfo` whether the states changed and the next time event.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2NewDiscreteStates(
+    c: fmi2Component,
+    eventInfo: *mut fmi2EventInfo,
+) -> fmi2Status {
+    call(c, "fmi2NewDiscreteStates", allowed::EVENT, |inst| {
+        let info = out(eventInfo, "eventInfo")?;
+        inst.new_discrete_states(info)
+    })
+}
+
+/// Enters continuous-time mode.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2EnterContinuousTimeMode(c: fmi2Component) -> fmi2Status {
+    call(c, "fmi2EnterContinuousTimeMode", allowed::EVENT, |inst| {
+        inst.enter_continuous_time_mode()
+    })
+}
+
+/// After an accepted integrator step: `*enterEventMode` is true when the states have moved
+/// where event mode must act (see `fmu/README.md`); `*terminateSimulation` is always false.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2CompletedIntegratorStep(
+    c: fmi2Component,
+    _noSetFMUStatePriorToCurrentPoint: fmi2Boolean,
+    enterEventMode: *mut fmi2Boolean,
+    terminateSimulation: *mut fmi2Boolean,
+) -> fmi2Status {
+    call(
+        c,
+        "fmi2CompletedIntegratorStep",
+        allowed::CONTINUOUS,
+        |inst| {
+            let enter = out(enterEventMode, "enterEventMode")?;
+            let terminate = out(terminateSimulation, "terminateSimulation")?;
+            *enter = inst.completed_integrator_step()?.into();
+            *terminate = fmi2False;
+            Ok(fmi2OK)
+        },
+    )
+}
+
+/// Sets the time (s): finite, not before the last event mode.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetTime(c: fmi2Component, time: fmi2Real) -> fmi2Status {
+    call(c, "fmi2SetTime", allowed::SET_TIME, |inst| {
+        inst.set_time(time)
+    })
+}
+
+/// Sets the continuous states `x` (m), `v` (m/s); `nx` must be 2.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2SetContinuousStates(
+    c: fmi2Component,
+    x: *const fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    call(c, "fmi2SetContinuousStates", allowed::CONTINUOUS, |inst| {
+        inst.set_continuous_states(array(x, nx, "x")?)
+    })
+}
+
+/// Copies `values` (`n` of them) into the host array `dst` (NULL refused unless `n` is 0).
+unsafe fn write_array(
+    dst: *mut fmi2Real,
+    n: usize,
+    what: &str,
+    values: Result<impl AsRef<[f64]>, String>,
+) -> Outcome {
+    let values = values?;
+    let dst = array_mut(dst, n, what)?;
+    dst.copy_from_slice(values.as_ref());
+    Ok(fmi2OK)
+}
+
+/// Derivatives `der_x` (m/s), `der_v` (m/s²) of the continuous states; `nx` must be 2.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetDerivatives(
+    c: fmi2Component,
+    derivatives: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    call(c, "fmi2GetDerivatives", allowed::ME_GET, |inst| {
+        let d = inst.derivatives(nx);
+        write_array(derivatives, nx, "derivatives", d)
+    })
+}
+
+/// Event indicators: gap `x − z` (m) in free flight or contact force (m/s²) while sticking, and
+/// `x − delta_x/2` (m); `ni` must be 2.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetEventIndicators(
+    c: fmi2Component,
+    eventIndicators: *mut fmi2Real,
+    ni: usize,
+) -> fmi2Status {
+    call(c, "fmi2GetEventIndicators", allowed::ME_GET, |inst| {
+        let z = inst.event_indicators(ni);
+        write_array(eventIndicators, ni, "eventIndicators", z)
+    })
+}
+
+/// The continuous states `x` (m), `v` (m/s); `nx` must be 2.
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetContinuousStates(
+    c: fmi2Component,
+    x: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    call(c, "fmi2GetContinuousStates", allowed::ME_GET, |inst| {
+        let s = inst.continuous_states(nx);
+        write_array(x, nx, "x", s)
+    })
+}
+
+/// Nominal magnitudes of the continuous states: `delta_x` (m), `omega0*delta_x` (m/s).
+#[no_mangle]
+pub unsafe extern "C" fn fmi2GetNominalsOfContinuousStates(
+    c: fmi2Component,
+    x_nominal: *mut fmi2Real,
+    nx: usize,
+) -> fmi2Status {
+    call(
+        c,
+        "fmi2GetNominalsOfContinuousStates",
+        allowed::NOMINALS,
+        |inst| {
+            let n = inst.nominals(nx);
+            write_array(x_nominal, nx, "x_nominal", n)
+        },
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
 
     #[test]
     fn a_panic_is_caught_and_puts_the_instance_into_the_error_state() {
-        let inst = Instance::new(c"t".into(), ptr::null_mut(), None, false);
+        let inst = Instance::new(
+            c"t".into(),
+            Interface::CoSimulation,
+            ptr::null_mut(),
+            None,
+            false,
+        );
         let c: fmi2Component = Box::into_raw(Box::new(inst)).cast();
         let status = call(c, "fmi2Test", allowed::ANY, |_| panic!("boom"));
         assert_eq!(status, fmi2Error);

@@ -48,7 +48,7 @@ pub const fmi2Pending: fmi2Status = 5;
 
 /// Kind of FMU requested at instantiation.
 pub type fmi2Type = c_int;
-/// Model exchange (not provided by this FMU).
+/// Model exchange.
 pub const fmi2ModelExchange: fmi2Type = 0;
 /// Co-simulation.
 pub const fmi2CoSimulation: fmi2Type = 1;
@@ -95,4 +95,22 @@ pub struct fmi2CallbackFunctions {
     pub stepFinished: fmi2StepFinished,
     /// Host data for the callbacks.
     pub componentEnvironment: fmi2ComponentEnvironment,
+}
+
+/// What `fmi2NewDiscreteStates` reports about the event iteration.
+#[repr(C)]
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct fmi2EventInfo {
+    /// Another `fmi2NewDiscreteStates` call is needed.
+    pub newDiscreteStatesNeeded: fmi2Boolean,
+    /// The model asks to end the simulation.
+    pub terminateSimulation: fmi2Boolean,
+    /// `fmi2GetNominalsOfContinuousStates` changed.
+    pub nominalsOfContinuousStatesChanged: fmi2Boolean,
+    /// The continuous states changed (re-read them, restart the integrator).
+    pub valuesOfContinuousStatesChanged: fmi2Boolean,
+    /// `nextEventTime` holds the time of the next time event.
+    pub nextEventTimeDefined: fmi2Boolean,
+    /// Time of the next time event (s), when defined.
+    pub nextEventTime: fmi2Real,
 }

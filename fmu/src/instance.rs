@@ -10,69 +10,113 @@ use std::ffi::CString;
 use bistable_core::Event;
 
 use crate::fmi2::*;
-use crate::md::{cat, var, Causality, Kind, CATEGORIES, VARS};
+use crate::md::{cat, var, Causality, Kind, CATEGORIES, NUMBER_OF_EVENT_INDICATORS, STATES, VARS};
+use crate::me::Me;
 use crate::model::{
     Model, PlateInputs, StepFailure, MAX_CLOCK_SPAN, MAX_PLATE_ORDER, MAX_STEP_SPAN,
 };
 use crate::state::Snapshot;
 
-/// FMI 2.0 co-simulation states (steps are synchronous: no `stepInProgress`/`stepCanceled`).
+/// Which FMI 2.0 interface an instance provides (the `fmuType` of `fmi2Instantiate`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Interface {
+    /// `fmi2ModelExchange`.
+    ModelExchange,
+    /// `fmi2CoSimulation`.
+    CoSimulation,
+}
+
+/// FMI 2.0 states of both interfaces (co-simulation steps are synchronous: no
+/// `stepInProgress`/`stepCanceled`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Lifecycle {
     /// After `fmi2Instantiate` or `fmi2Reset`.
     Instantiated,
     /// Between `fmi2EnterInitializationMode` and `fmi2ExitInitializationMode`.
     InitializationMode,
-    /// Ready for `fmi2DoStep`.
+    /// Co-simulation: ready for `fmi2DoStep`.
     StepComplete,
-    /// `fmi2DoStep` returned `fmi2Discard`.
+    /// Co-simulation: `fmi2DoStep` returned `fmi2Discard`.
     StepFailed,
     /// After `fmi2Terminate`.
     Terminated,
     /// After an internal fault.
     Error,
+    /// Model Exchange: after `fmi2ExitInitializationMode` or `fmi2EnterEventMode`.
+    EventMode,
+    /// Model Exchange: after `fmi2EnterContinuousTimeMode`.
+    ContinuousTimeMode,
 }
 
-/// Sets of lifecycle states in which a function may be called.
+/// Sets of lifecycle states, and the interfaces, in which a function may be called (the
+/// FMI 2.0 tables of allowed calls for co-simulation and Model Exchange).
 pub mod allowed {
+    use super::Interface;
     use super::Lifecycle::{self, *};
 
-    /// A set of states.
-    pub type Mask = u8;
+    /// A set of states (bits 0..8) and interfaces (bits 8, 9).
+    pub type Mask = u16;
 
     const fn bit(l: Lifecycle) -> Mask {
         1 << l as u8
     }
 
-    /// Every state.
+    const CS: Mask = 1 << 8;
+    const ME: Mask = 1 << 9;
+    const BOTH: Mask = CS | ME;
+    const AFTER_INIT: Mask = bit(Terminated) | bit(Error);
+    const ME_RUN: Mask = bit(EventMode) | bit(ContinuousTimeMode);
+
+    /// Every state, both interfaces.
     pub const ANY: Mask = !0;
     /// `fmi2SetupExperiment`, `fmi2EnterInitializationMode`.
-    pub const INSTANTIATED: Mask = bit(Instantiated);
+    pub const INSTANTIATED: Mask = bit(Instantiated) | BOTH;
     /// `fmi2ExitInitializationMode`.
-    pub const INIT: Mask = bit(InitializationMode);
-    /// `fmi2Set*`, `fmi2SetRealInputDerivatives`.
-    pub const SET: Mask = bit(Instantiated) | bit(InitializationMode) | bit(StepComplete);
+    pub const INIT: Mask = bit(InitializationMode) | BOTH;
+    /// `fmi2Set*` (which variables, see `Instance::set`).
+    pub const SET: Mask =
+        bit(Instantiated) | bit(InitializationMode) | bit(StepComplete) | ME_RUN | BOTH;
     /// `fmi2Get*`.
-    pub const GET: Mask = bit(InitializationMode)
-        | bit(StepComplete)
-        | bit(StepFailed)
-        | bit(Terminated)
-        | bit(Error);
-    /// `fmi2GetRealOutputDerivatives`.
-    pub const GET_DERIVATIVES: Mask =
-        bit(StepComplete) | bit(StepFailed) | bit(Terminated) | bit(Error);
-    /// `fmi2DoStep`.
-    pub const STEP: Mask = bit(StepComplete);
+    pub const GET: Mask =
+        bit(InitializationMode) | bit(StepComplete) | bit(StepFailed) | ME_RUN | AFTER_INIT | BOTH;
     /// `fmi2Terminate`.
-    pub const TERMINATE: Mask = bit(StepComplete) | bit(StepFailed);
-    /// `fmi2Get*Status`.
-    pub const STATUS: Mask = bit(StepComplete) | bit(StepFailed) | bit(Terminated);
-    /// `fmi2CancelStep` (only while an asynchronous step runs, which never happens).
-    pub const NONE: Mask = 0;
+    pub const TERMINATE: Mask = bit(StepComplete) | bit(StepFailed) | ME_RUN | BOTH;
+    /// `fmi2SetRealInputDerivatives` (co-simulation).
+    pub const SET_DERIVATIVES: Mask =
+        bit(Instantiated) | bit(InitializationMode) | bit(StepComplete) | CS;
+    /// `fmi2GetRealOutputDerivatives` (co-simulation).
+    pub const GET_DERIVATIVES: Mask = bit(StepComplete) | bit(StepFailed) | AFTER_INIT | CS;
+    /// `fmi2DoStep` (co-simulation).
+    pub const STEP: Mask = bit(StepComplete) | CS;
+    /// `fmi2Get*Status` (co-simulation).
+    pub const STATUS: Mask = bit(StepComplete) | bit(StepFailed) | bit(Terminated) | CS;
+    /// `fmi2CancelStep` (co-simulation; refused in every state, no step is ever pending).
+    pub const CANCEL: Mask = !ME;
+    /// `fmi2EnterEventMode` (Model Exchange).
+    pub const ENTER_EVENT: Mask = ME_RUN | ME;
+    /// `fmi2NewDiscreteStates`, `fmi2EnterContinuousTimeMode` (Model Exchange).
+    pub const EVENT: Mask = bit(EventMode) | ME;
+    /// `fmi2CompletedIntegratorStep`, `fmi2SetContinuousStates` (Model Exchange).
+    pub const CONTINUOUS: Mask = bit(ContinuousTimeMode) | ME;
+    /// `fmi2SetTime` (Model Exchange).
+    pub const SET_TIME: Mask = ME_RUN | ME;
+    /// `fmi2GetEventIndicators`, `fmi2GetContinuousStates`, `fmi2GetDerivatives` (Model
+    /// Exchange).
+    pub const ME_GET: Mask = bit(InitializationMode) | ME_RUN | AFTER_INIT | ME;
+    /// `fmi2GetNominalsOfContinuousStates` (Model Exchange).
+    pub const NOMINALS: Mask = bit(Instantiated) | ME_GET;
 
     /// Whether `l` is in `mask`.
     pub fn contains(mask: Mask, l: Lifecycle) -> bool {
         mask & bit(l) != 0
+    }
+
+    /// Whether `mask` includes the interface `i`.
+    pub fn provides(mask: Mask, i: Interface) -> bool {
+        mask & match i {
+            Interface::CoSimulation => CS,
+            Interface::ModelExchange => ME,
+        } != 0
     }
 }
 
@@ -90,6 +134,8 @@ pub struct Instance {
     logger: fmi2CallbackLogger,
     logging_on: bool,
     enabled: Vec<bool>,
+    /// Interface provided (fixed at instantiation).
+    pub interface: Interface,
     /// Lifecycle state.
     pub lifecycle: Lifecycle,
     values: Vec<f64>,
@@ -100,6 +146,8 @@ pub struct Instance {
     start_time: f64,
     stop_time: Option<f64>,
     model: Option<Model>,
+    /// The running Model Exchange model, after initialization (ME instances).
+    me: Option<Me>,
     /// Outputs must be recomputed before they are read (they are computed on demand, so a
     /// step costs only the integration).
     outputs_stale: bool,
@@ -120,15 +168,17 @@ fn label(index: usize) -> String {
 }
 
 impl Instance {
-    /// A new instance in state `Instantiated`.
+    /// A new instance of `interface` in state `Instantiated`.
     pub fn new(
         name: CString,
+        interface: Interface,
         env: fmi2ComponentEnvironment,
         logger: fmi2CallbackLogger,
         logging_on: bool,
     ) -> Self {
         Self {
             magic: MAGIC,
+            interface,
             name,
             env,
             logger,
@@ -141,6 +191,7 @@ impl Instance {
             start_time: 0.0,
             stop_time: None,
             model: None,
+            me: None,
             outputs_stale: true,
             last_successful_time: 0.0,
             terminated: false,
@@ -265,8 +316,16 @@ impl Instance {
         Ok(model)
     }
 
-    /// `fmi2ExitInitializationMode`: checks the parameters and starts the simulation.
+    /// `fmi2ExitInitializationMode`: checks the parameters and starts the simulation
+    /// (co-simulation: with the events at the start time; Model Exchange: in event mode, where
+    /// `fmi2NewDiscreteStates` processes them).
     pub fn exit_initialization(&mut self) -> Outcome {
+        if self.interface == Interface::ModelExchange {
+            self.me = Some(Me::start(&self.values, self.start_time)?);
+            self.outputs_stale = true;
+            self.lifecycle = Lifecycle::EventMode;
+            return Ok(fmi2OK);
+        }
         let model = self.start_model()?;
         self.model = Some(model);
         self.log_events();
@@ -278,9 +337,14 @@ impl Instance {
     /// Logs the collected events under `logEvents` (when enabled) and clears them.
     fn log_events(&mut self) {
         let on = self.logging_on && (self.enabled[cat::logEvents] || self.enabled[cat::logAll]);
-        if let (true, Some(model)) = (on, &self.model) {
+        if on {
             for e in &self.events {
-                self.log(fmi2OK, cat::logEvents, &model.describe_event(e));
+                let line = match (&self.model, &self.me) {
+                    (Some(model), _) => model.describe_event(e),
+                    (_, Some(me)) => me.describe_event(e),
+                    _ => continue,
+                };
+                self.log(fmi2OK, cat::logEvents, &line);
             }
         }
         self.events.clear();
@@ -300,6 +364,7 @@ impl Instance {
         self.start_time = 0.0;
         self.stop_time = None;
         self.model = None;
+        self.me = None;
         self.outputs_stale = true;
         self.last_successful_time = 0.0;
         self.terminated = false;
@@ -330,19 +395,31 @@ impl Instance {
             .iter()
             .map(|&vr| Self::lookup(vr, kind))
             .collect::<Result<Vec<_>, _>>()?;
-        let wants_output = idx.iter().any(|&i| VARS[i].causality == Causality::Output);
+        let wants_output = idx
+            .iter()
+            .any(|&i| matches!(VARS[i].causality, Causality::Output | Causality::Local));
         if wants_output && self.outputs_stale {
-            match &mut self.model {
-                Some(model) => model.write_outputs(&mut self.values)?,
-                // Initialization mode: the outputs at the start time from the current values.
-                None => {
-                    self.start_model()
-                        .map_err(|e| format!("outputs cannot be computed: {e}"))?;
-                }
-            }
-            self.outputs_stale = false;
+            self.refresh_outputs()?;
         }
         Ok(idx.iter().map(|&i| self.values[i]).collect())
+    }
+
+    /// Recomputes the outputs (and state derivatives) into `values`; in initialization mode
+    /// from a model built at the start time from the current values.
+    fn refresh_outputs(&mut self) -> Result<(), String> {
+        let cannot = |e: String| format!("outputs cannot be computed: {e}");
+        match (&mut self.model, &self.me, self.interface) {
+            (Some(model), _, _) => model.write_outputs(&mut self.values)?,
+            (_, Some(me), _) => me.write_outputs(&mut self.values),
+            (None, None, Interface::CoSimulation) => {
+                self.start_model().map_err(cannot)?;
+            }
+            (None, None, Interface::ModelExchange) => Me::start(&self.values, self.start_time)
+                .map_err(cannot)?
+                .write_outputs(&mut self.values),
+        }
+        self.outputs_stale = false;
+        Ok(())
     }
 
     /// Sets the variables `vrs` of type `kind` (all or none).
@@ -362,16 +439,26 @@ impl Instance {
 
     fn check_settable(&self, i: usize) -> Result<(), String> {
         let v = &VARS[i];
+        let running = matches!(
+            self.lifecycle,
+            Lifecycle::StepComplete | Lifecycle::EventMode | Lifecycle::ContinuousTimeMode
+        );
         match v.causality {
             Causality::Output => Err(format!("{} is an output and cannot be set", label(i))),
-            Causality::Parameter
-                if !v.tunable && self.lifecycle == Lifecycle::StepComplete =>
-            {
+            Causality::Local => Err(format!(
+                "{} is computed by the FMU and cannot be set",
+                label(i)
+            )),
+            Causality::Parameter if self.lifecycle == Lifecycle::ContinuousTimeMode => {
                 Err(format!(
-                    "{} is a fixed parameter: set it before fmi2ExitInitializationMode (or after fmi2Reset)",
+                    "{} is a parameter: in continuous-time mode only inputs can be set (tunable parameters in event mode)",
                     label(i)
                 ))
             }
+            Causality::Parameter if !v.tunable && running => Err(format!(
+                "{} is a fixed parameter: set it before fmi2ExitInitializationMode (or after fmi2Reset)",
+                label(i)
+            )),
             _ => Ok(()),
         }
     }
@@ -503,6 +590,107 @@ impl Instance {
         }
     }
 
+    /// The running Model Exchange model.
+    fn me_mut(&mut self) -> Result<&mut Me, String> {
+        self.me
+            .as_mut()
+            .ok_or_else(|| "no model (internal state lost)".to_string())
+    }
+
+    /// The Model Exchange model now: the running one, or in initialization mode one built at
+    /// the start time from the current values.
+    fn me_now(&self) -> Result<std::borrow::Cow<'_, Me>, String> {
+        match &self.me {
+            Some(me) => Ok(std::borrow::Cow::Borrowed(me)),
+            None if self.lifecycle == Lifecycle::InitializationMode => {
+                Me::start(&self.values, self.start_time).map(std::borrow::Cow::Owned)
+            }
+            None => Err("no model (internal state lost)".into()),
+        }
+    }
+
+    /// `fmi2SetTime` (s).
+    pub fn set_time(&mut self, t: f64) -> Outcome {
+        self.me_mut()?.set_time(t)?;
+        self.outputs_stale = true;
+        Ok(fmi2OK)
+    }
+
+    /// `fmi2SetContinuousStates` (SI, `x` then `v`).
+    pub fn set_continuous_states(&mut self, x: &[f64]) -> Outcome {
+        self.me_mut()?.set_states(x)?;
+        self.outputs_stale = true;
+        Ok(fmi2OK)
+    }
+
+    /// `fmi2GetContinuousStates` (SI) for `n` states.
+    pub fn continuous_states(&self, n: usize) -> Result<[f64; 2], String> {
+        check_count("nx", n, STATES.len())?;
+        Ok(self.me_now()?.states())
+    }
+
+    /// `fmi2GetNominalsOfContinuousStates` (SI) for `n` states.
+    pub fn nominals(&self, n: usize) -> Result<[f64; 2], String> {
+        check_count("nx", n, STATES.len())?;
+        Ok(Me::nominals(&self.values))
+    }
+
+    /// `fmi2GetDerivatives` (SI) for `n` states.
+    pub fn derivatives(&mut self, n: usize) -> Result<Vec<f64>, String> {
+        check_count("nx", n, STATES.len())?;
+        if self.outputs_stale {
+            self.refresh_outputs()?;
+        }
+        Ok(crate::md::DERIVATIVES
+            .iter()
+            .map(|&i| self.values[i])
+            .collect())
+    }
+
+    /// `fmi2GetEventIndicators` (SI) for `n` indicators.
+    pub fn event_indicators(&self, n: usize) -> Result<[f64; 2], String> {
+        check_count("ni", n, NUMBER_OF_EVENT_INDICATORS)?;
+        Ok(self.me_now()?.indicators(&self.values))
+    }
+
+    /// `fmi2EnterEventMode`.
+    pub fn enter_event_mode(&mut self) -> Outcome {
+        self.me_mut()?.enter_event_mode();
+        self.outputs_stale = true;
+        self.lifecycle = Lifecycle::EventMode;
+        Ok(fmi2OK)
+    }
+
+    /// `fmi2NewDiscreteStates`: settles the events at the current time (one call suffices).
+    pub fn new_discrete_states(&mut self, info: &mut fmi2EventInfo) -> Outcome {
+        let me = self.me.as_mut().ok_or("no model (internal state lost)")?;
+        let up = me.update(&self.values, &mut self.events)?;
+        let next = me.next_event_time();
+        self.outputs_stale = true;
+        self.log_events();
+        *info = fmi2EventInfo {
+            valuesOfContinuousStatesChanged: up.states_changed.into(),
+            nextEventTimeDefined: next.is_some().into(),
+            nextEventTime: next.unwrap_or(0.0),
+            ..fmi2EventInfo::default()
+        };
+        Ok(fmi2OK)
+    }
+
+    /// `fmi2EnterContinuousTimeMode`.
+    pub fn enter_continuous_time_mode(&mut self) -> Outcome {
+        self.lifecycle = Lifecycle::ContinuousTimeMode;
+        Ok(fmi2OK)
+    }
+
+    /// `fmi2CompletedIntegratorStep`: whether event mode is needed now (see
+    /// [`Me::needs_event`]); the model never asks to terminate.
+    pub fn completed_integrator_step(&mut self) -> Result<bool, String> {
+        let values = &self.values;
+        let me = self.me.as_ref().ok_or("no model (internal state lost)")?;
+        Ok(me.needs_event(values))
+    }
+
     /// `fmi2GetRealStatus`.
     pub fn real_status(&self, kind: fmi2StatusKind) -> Result<Option<f64>, String> {
         match kind {
@@ -538,6 +726,8 @@ impl Instance {
     pub fn snapshot(&mut self) -> Result<Snapshot, String> {
         let model = self.model.as_mut().map(Model::save).transpose()?;
         Ok(Snapshot {
+            interface: self.interface,
+            me: self.me.as_ref().map(Me::save),
             lifecycle: self.lifecycle,
             values: self.values.clone(),
             inputs: self.derivatives,
@@ -549,8 +739,19 @@ impl Instance {
         })
     }
 
-    /// Checks a snapshot fully and returns the model it holds.
-    pub fn validate(s: &Snapshot) -> Result<Option<Model>, String> {
+    /// Checks that a snapshot fits this instance (same interface) and returns its models.
+    pub fn accept(&self, s: &Snapshot) -> Result<(Option<Model>, Option<Me>), String> {
+        if s.interface != self.interface {
+            return Err(format!(
+                "FMU state: made by a {:?} instance, this one is {:?}",
+                s.interface, self.interface
+            ));
+        }
+        Self::validate(s)
+    }
+
+    /// Checks a snapshot fully and returns the models it holds (co-simulation, Model Exchange).
+    pub fn validate(s: &Snapshot) -> Result<(Option<Model>, Option<Me>), String> {
         for (i, &v) in s.values.iter().enumerate() {
             check_range(i, v).map_err(|e| format!("FMU state: {e}"))?;
         }
@@ -597,7 +798,21 @@ impl Instance {
             s.lifecycle,
             Lifecycle::Instantiated | Lifecycle::InitializationMode
         );
-        match &s.model {
+        if s.interface == Interface::ModelExchange {
+            return Self::validate_me(s, needs_model).map(|me| (None, me));
+        }
+        if s.me.is_some()
+            || matches!(
+                s.lifecycle,
+                Lifecycle::EventMode | Lifecycle::ContinuousTimeMode
+            )
+        {
+            return Err(format!(
+                "FMU state: a Model Exchange model or state {:?} in a co-simulation state",
+                s.lifecycle
+            ));
+        }
+        let model = match &s.model {
             Some(_) if !needs_model && s.lifecycle != Lifecycle::Error => Err(format!(
                 "FMU state: a running model in state {:?}",
                 s.lifecycle
@@ -609,12 +824,49 @@ impl Instance {
                 Err(format!("FMU state: no model in state {:?}", s.lifecycle))
             }
             None => Ok(None),
+        }?;
+        Ok((model, None))
+    }
+
+    /// The Model Exchange part of [`Instance::validate`] (`needs_model`: the lifecycle state
+    /// is after initialization).
+    fn validate_me(s: &Snapshot, needs_model: bool) -> Result<Option<Me>, String> {
+        let cs_only = matches!(s.lifecycle, Lifecycle::StepComplete | Lifecycle::StepFailed)
+            || s.model.is_some()
+            || s.terminated
+            || s.inputs.iter().any(Option::is_some);
+        if cs_only {
+            return Err(format!(
+                "FMU state: co-simulation state {:?}, model or flags in a Model Exchange state",
+                s.lifecycle
+            ));
         }
+        let me = match &s.me {
+            Some(_) if !needs_model && s.lifecycle != Lifecycle::Error => {
+                return Err(format!(
+                    "FMU state: a running model in state {:?}",
+                    s.lifecycle
+                ))
+            }
+            Some(m) => Me::restore(&s.values, m).map_err(|e| format!("FMU state: {e}"))?,
+            None if needs_model && s.lifecycle != Lifecycle::Error => {
+                return Err(format!("FMU state: no model in state {:?}", s.lifecycle))
+            }
+            None => return Ok(None),
+        };
+        if me.time() < s.start_time - slack(s.start_time) {
+            return Err(format!(
+                "FMU state: time {} s before the start time {} s",
+                me.time(),
+                s.start_time
+            ));
+        }
+        Ok(Some(me))
     }
 
     /// `fmi2SetFMUstate`.
     pub fn restore(&mut self, s: &Snapshot) -> Outcome {
-        let model = Self::validate(s)?;
+        let (model, me) = self.accept(s)?;
         self.lifecycle = s.lifecycle;
         self.values.clone_from(&s.values);
         self.derivatives = s.inputs;
@@ -625,6 +877,7 @@ impl Instance {
         self.terminated = s.terminated;
         self.outputs_stale = true;
         self.model = model;
+        self.me = me;
         Ok(fmi2OK)
     }
 
@@ -656,6 +909,15 @@ impl Instance {
         // SAFETY: registered, so it came from `Box::into_raw` and is freed once.
         drop(unsafe { Box::from_raw(h.cast::<Snapshot>()) });
         Ok(fmi2OK)
+    }
+}
+
+/// Refuses an array length `n` (named `what`) other than `expected`.
+fn check_count(what: &str, n: usize, expected: usize) -> Result<(), String> {
+    if n == expected {
+        Ok(())
+    } else {
+        Err(format!("{what} = {n}: the model has {expected}"))
     }
 }
 

@@ -1,6 +1,7 @@
-//! FMI 2.0 co-simulation FMU `bistable_impact`: a thin C-ABI adapter over `bistable-core`.
+//! FMI 2.0 Model Exchange and co-simulation FMU `bistable_impact`: a thin C-ABI adapter over
+//! `bistable-core`.
 //!
-//! The shared library exports the 34 common and co-simulation `fmi2*` functions (see
+//! The shared library exports the 44 common, co-simulation and Model Exchange `fmi2*` functions (see
 //! `exports.rs` and the generated header `include/bistable_impact.h`). Variables, value
 //! references, start values and ranges come from the top-level `modelDescription.xml` (through
 //! `build.rs`). Every export catches panics and checks its arguments; see `fmu/README.md`.
@@ -9,5 +10,6 @@ pub mod exports;
 pub mod fmi2;
 pub mod instance;
 pub mod md;
+pub mod me;
 pub mod model;
 pub mod state;

@@ -22,6 +22,8 @@ pub enum Causality {
     Input,
     /// Computed by the FMU.
     Output,
+    /// Computed by the FMU, not an output (the state derivatives of Model Exchange).
+    Local,
 }
 
 /// One scalar variable of the model description.

@@ -8,9 +8,9 @@
 use std::ops::ControlFlow;
 
 use bistable_core::{
-    potential, ChatterRule, Checkpoint, ContactMode, Event, Instant, Observer, ParamError, Params,
-    PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator, Sinusoid,
-    SolverOptions, StepView, Well,
+    potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
+    Params, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator,
+    Sinusoid, SolverOptions, State, StepView, Well,
 };
 
 use crate::md::var;
@@ -31,7 +31,7 @@ pub(crate) const MAX_STEP_SPAN: f64 = 1e6;
 
 /// Whether a sinusoid of frequency `omega` with origin `origin` is within the clock range at
 /// `now` (and the origin not after it).
-fn origin_in_range(omega: f64, origin: Instant, now: Instant) -> bool {
+pub(crate) fn origin_in_range(omega: f64, origin: Instant, now: Instant) -> bool {
     origin <= now && omega.max(1.0) * now.since(origin) < MAX_CLOCK_SPAN
 }
 
@@ -149,7 +149,7 @@ pub type PlateInputs = [Option<f64>; MAX_PLATE_ORDER + 1];
 
 /// The plate derivatives from the inputs: `z_in`, `zdot_in`, then the higher ones given with
 /// `fmi2SetRealInputDerivatives` (`derivatives`, orders 2..=5).
-fn plate_inputs(values: &[f64], derivatives: &PlateInputs) -> PlateInputs {
+pub(crate) fn plate_inputs(values: &[f64], derivatives: &PlateInputs) -> PlateInputs {
     let mut p = *derivatives;
     p[0] = Some(values[var::z_in]);
     p[1] = Some(values[var::zdot_in]);
@@ -273,22 +273,17 @@ impl Model {
         t_start: f64,
         events: &mut Vec<Event>,
     ) -> Result<Self, String> {
-        let scale = Scale::of(values);
-        let mode = ShakerMode::of(values[var::shaker_mode])
-            .ok_or_else(|| format!("invalid shaker_mode = {}", values[var::shaker_mode]))?;
-        let params =
-            Params::new(values[var::zeta], values[var::e]).map_err(|e| describe_param(&e))?;
-        let opts =
-            SolverOptions::new(values[var::tol], chatter_rule()).map_err(|e| describe_param(&e))?;
-        let (omega, v) = (values[var::Omega], values[var::V]);
-        let tau0 = scale.tau(t_start);
-        if !tau0.is_finite() {
-            return Err(format!("start time {t_start} s times omega0 is not finite"));
-        }
-        let origin = Instant::new(tau0);
-        let phase_ref = Sinusoid::new(omega, v)
-            .and_then(|s| s.with_origin(origin, 0.0, 0.0))
-            .map_err(|e| describe_param(&e))?;
+        let Setup {
+            scale,
+            mode,
+            params,
+            opts,
+            phase_ref,
+            origin,
+            x0,
+            v0,
+        } = Setup::of(values, t_start)?;
+        let tau0 = origin.to_f64();
         let plate: PlateMotion = match mode {
             ShakerMode::Internal => phase_ref.into(),
             // Only its start matters: every step replaces it with a piece over the step.
@@ -297,16 +292,13 @@ impl Model {
                 plate_piece(&scale, origin, tau0 + 1.0, &inputs, None)?.into()
             }
         };
-        let x0 = values[var::x0] / scale.dx;
-        let v0 = values[var::v0] / (scale.omega0 * scale.dx);
-        let mut sim = Simulator::with_state(params, plate, opts, tau0, x0, v0).map_err(|e| match e {
-            SimError::Param(p) if p.name == "x0" => format!(
-                "x0 = {} m is below the plate position z = {} m at the start time: the mass must start on or above the plate",
-                values[var::x0],
-                scale.length(plate.motion(origin).0)
-            ),
-            other => describe(&other, &scale),
-        })?;
+        let mut sim =
+            Simulator::with_state(params, plate, opts, tau0, x0, v0).map_err(|e| match e {
+                SimError::Param(p) if p.name == "x0" => {
+                    below_plate(values, scale.length(plate.motion(origin).0))
+                }
+                other => describe(&other, &scale),
+            })?;
         let mut taylor_end = f64::NEG_INFINITY;
         let mut obs = Collect {
             events,
@@ -321,7 +313,7 @@ impl Model {
             scale,
             mode,
             phase_ref,
-            applied: (omega, v),
+            applied: (phase_ref.omega(), phase_ref.velocity()),
             time: t_start,
             pending: None,
             taylor_end,
@@ -360,37 +352,13 @@ impl Model {
             return Err("the FMU state's solver settings are not this FMU's".into());
         }
         let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
-        let (omega, v, hi, lo, phase0, offset) = saved.phase_ref;
-        let origin = Instant::from_parts(hi, lo).ok_or("invalid phase origin in the FMU state")?;
-        if !(phase0.abs() <= std::f64::consts::PI && origin_in_range(omega, origin, sim.instant()))
-        {
-            return Err(format!(
-                "the FMU state's phase reference (origin {} s, phase {phase0} rad) is out of range",
-                scale.time(origin.to_f64())
-            ));
-        }
-        // The phase reference follows the shaker parameters in force; in internal mode it is
-        // the plate itself.
-        let ref_record = PlateRecord::Sinusoid {
-            omega,
-            velocity: v,
-            origin: (hi, lo),
-            phase0,
-            offset,
-        };
-        let internal_plate_ok = external || cp.plate == ref_record;
-        // `(Ω, V)` in force were values of the parameters, so within their ranges.
-        let in_range =
-            |i: usize, x: f64| (crate::md::VARS[i].min..=crate::md::VARS[i].max).contains(&x);
-        let applied_ok = in_range(var::Omega, omega) && in_range(var::V, v);
-        if (omega, v) != saved.applied || !internal_plate_ok || !applied_ok {
+        let phase_ref = restore_phase_ref(&scale, saved.phase_ref, saved.applied, sim.instant())?;
+        // In internal mode the phase reference is the plate itself.
+        if !external && cp.plate != sinusoid_record(&phase_ref) {
             return Err(
                 "the FMU state's phase reference does not match its shaker or plate".into(),
             );
         }
-        let phase_ref = Sinusoid::new(omega, v)
-            .and_then(|s| s.with_origin(origin, phase0, offset))
-            .map_err(|e| describe_param(&e))?;
         let mode = ShakerMode::of(values[var::shaker_mode])
             .ok_or("invalid shaker_mode in the FMU state")?;
         // The communication time must be where the simulator is (a step or a Discard leaves
@@ -406,7 +374,7 @@ impl Model {
                 scale.time(tau)
             ));
         }
-        check_inside_step(&sim, if external { 1.0 } else { omega })?;
+        check_inside_step(&sim, if external { 1.0 } else { phase_ref.omega() })?;
         let history = SampleHistory::from_entries(&saved.history)
             .filter(|h| {
                 h.newest().is_none_or(|s| s.t <= sim.instant())
@@ -490,18 +458,9 @@ impl Model {
     /// The parts to save (pointer-free).
     pub fn save(&mut self) -> Result<SavedModel, String> {
         self.sync()?;
-        let (origin, phase0, offset) = self.phase_ref.origin();
-        let (hi, lo) = origin.parts();
         Ok(SavedModel {
             checkpoint: self.sim.checkpoint(),
-            phase_ref: (
-                self.phase_ref.omega(),
-                self.phase_ref.velocity(),
-                hi,
-                lo,
-                phase0,
-                offset,
-            ),
+            phase_ref: save_phase_ref(&self.phase_ref),
             applied: self.applied,
             time: self.time,
             history: self.history.entries().collect(),
@@ -521,8 +480,10 @@ impl Model {
         events: &mut Vec<Event>,
     ) -> Result<(), StepFailure> {
         let (tau_end, _, same_plate) = self.plan(t_end, values);
-        self.impulse = 0.0;
+        // The impulse is replaced only by a step that is not refused (a refusal leaves the
+        // model as it was).
         if same_plate && tau_end < self.taylor_end {
+            self.impulse = 0.0;
             self.pending = Some(tau_end);
             self.time = t_end;
             return Ok(());
@@ -554,6 +515,7 @@ impl Model {
         if !moves {
             // A step shorter than the resolution of the core's time (e.g. h = 5e-324 s, or
             // omega0 < 1): nothing moves, only the communication time.
+            self.impulse = 0.0;
             self.time = t_end;
             return Ok(());
         }
@@ -565,6 +527,7 @@ impl Model {
             self.phase_ref,
             self.applied,
             self.history,
+            self.impulse,
         );
         let undo_time = self.time;
         // A refused step leaves the model as it was: everything that can fail comes before the
@@ -680,44 +643,145 @@ impl Model {
     }
 
     /// Back to the state saved before a step (see [`Model::step_core`]).
-    fn undo(&mut self, (cp, phase_ref, applied, history): &Undo) {
+    fn undo(&mut self, (cp, phase_ref, applied, history, impulse): &Undo) {
         if let Ok(sim) = Simulator::from_checkpoint(cp) {
             self.sim = sim;
             self.phase_ref = *phase_ref;
             self.applied = *applied;
             self.history = *history;
-            self.impulse = 0.0;
+            self.impulse = *impulse;
             self.taylor_end = f64::NEG_INFINITY;
             self.pending = None;
         }
     }
 
-    /// Impact phase in cycles: the core's in internal mode, else from the reference sinusoid.
-    pub fn phase_of(&self, t: f64, core_phase: Option<f64>) -> f64 {
-        core_phase.unwrap_or_else(|| self.phase_ref.phase_cycles(Instant::new(t)))
-    }
-
-    /// Writes every output variable into `values`.
+    /// Writes every output variable (and the state derivatives) into `values`.
     pub fn write_outputs(&mut self, values: &mut [f64]) -> Result<(), String> {
         self.sync()?;
+        let state = self.sim.state();
+        let stats = self.sim.stats();
+        let zddot = self.sim.plate().motion(self.sim.instant()).2;
+        Observed {
+            params: self.sim.params(),
+            state,
+            zddot,
+            impacts: stats.impacts,
+            snap_throughs: stats.snap_throughs,
+            last_impact: self.sim.last_impact(),
+            impulse: self.impulse,
+        }
+        .write(&self.scale, &self.phase_ref, values);
+        Ok(())
+    }
+
+    /// First time derivative (SI) of the output `index`, for `x`, `v`, `z`, `zdot` (after
+    /// [`Model::sync`]).
+    pub fn output_derivative(&self, index: usize) -> Option<f64> {
         let s = &self.scale;
         let st = self.sim.state();
-        let stats = self.sim.stats();
+        let zdd = self.sim.plate().motion(self.sim.instant()).2;
+        let a = mass_acceleration(self.sim.params(), &st, zdd);
+        Some(match index {
+            i if i == var::x => s.velocity(st.v),
+            i if i == var::v => s.acceleration(a),
+            i if i == var::z => s.velocity(st.zdot),
+            i if i == var::zdot => s.acceleration(zdd),
+            _ => return None,
+        })
+    }
+
+    /// A line for the `logEvents` category (SI units, full precision).
+    pub fn describe_event(&self, e: &Event) -> String {
+        describe_event(&self.scale, &self.phase_ref, e)
+    }
+}
+
+/// Acceleration of the mass (nondimensional) in the state `st` with plate acceleration `zdd`:
+/// the plate's while riding it, else free flight (Eq. 4).
+pub fn mass_acceleration(params: &Params, st: &State, zdd: f64) -> f64 {
+    match st.mode {
+        ContactMode::Sticking => zdd,
+        ContactMode::Free => params.flight_acceleration(st.x, st.v),
+    }
+}
+
+/// Impact phase in cycles: the core's (internal mode), else from the reference sinusoid.
+pub fn phase_of(phase_ref: &Sinusoid, i: &Impact) -> f64 {
+    i.phase
+        .unwrap_or_else(|| phase_ref.phase_cycles(Instant::new(i.t)))
+}
+
+/// A line for the `logEvents` category (SI units, full precision), for both interfaces.
+pub fn describe_event(s: &Scale, phase_ref: &Sinusoid, e: &Event) -> String {
+    match *e {
+        Event::Impact(i) => format!(
+            "impact {} at t={:.17e} s phase={:.17e} x={:.17e} m v_before={:.17e} m/s v_after={:.17e} m/s",
+            i.index,
+            s.time(i.t),
+            phase_of(phase_ref, &i),
+            s.length(i.x),
+            s.velocity(i.v_before),
+            s.velocity(i.v_after)
+        ),
+        Event::StickStart { t, x, cause, .. } => format!(
+            "stick start at t={:.17e} s x={:.17e} m ({cause:?})",
+            s.time(t),
+            s.length(x)
+        ),
+        Event::StickEnd { t, x, .. } => format!(
+            "stick end at t={:.17e} s x={:.17e} m",
+            s.time(t),
+            s.length(x)
+        ),
+        Event::SnapThrough { t, to, .. } => format!(
+            "snap-through to well {} at t={:.17e} s",
+            to.number(),
+            s.time(t)
+        ),
+    }
+}
+
+/// What the outputs are computed from (nondimensional), for both interfaces.
+pub struct Observed<'a> {
+    /// Model parameters.
+    pub params: &'a Params,
+    /// Mass and plate now.
+    pub state: State,
+    /// Plate acceleration now.
+    pub zddot: f64,
+    /// Impacts so far.
+    pub impacts: u64,
+    /// Snap-throughs so far.
+    pub snap_throughs: u64,
+    /// The last impact.
+    pub last_impact: Option<Impact>,
+    /// Momentum per unit mass given to the plate (see [`Model::impulse`]).
+    pub impulse: f64,
+}
+
+impl Observed<'_> {
+    /// Writes every output variable and the state derivatives `der_x`, `der_v` (SI).
+    pub fn write(&self, s: &Scale, phase_ref: &Sinusoid, values: &mut [f64]) {
+        let st = &self.state;
         let count = |n: u64| n.min(i32::MAX as u64) as f64;
+        let a = mass_acceleration(self.params, st, self.zddot);
+        let riding = st.mode == ContactMode::Sticking;
         values[var::x] = s.length(st.x);
         values[var::v] = s.velocity(st.v);
+        values[var::der_x] = s.velocity(if riding { st.zdot } else { st.v });
+        values[var::der_v] = s.acceleration(a);
         values[var::z] = s.length(st.z);
         values[var::zdot] = s.velocity(st.zdot);
         values[var::kinetic_energy] = s.energy(st.kinetic_energy());
         values[var::potential_energy] = s.energy(st.potential_energy());
-        values[var::impact_count] = count(stats.impacts);
-        values[var::snap_through_count] = count(stats.snap_throughs);
+        values[var::impact_count] = count(self.impacts);
+        values[var::snap_through_count] = count(self.snap_throughs);
         values[var::well] = f64::from(st.well.number());
-        values[var::in_contact] = f64::from(u8::from(st.mode == ContactMode::Sticking));
-        let (t, phase, vb, va, dk) = match self.sim.last_impact() {
+        values[var::in_contact] = f64::from(u8::from(riding));
+        let (t, phase, vb, va, dk) = match &self.last_impact {
             Some(i) => (
                 s.time(i.t),
-                self.phase_of(i.t, i.phase),
+                phase_of(phase_ref, i),
                 s.velocity(i.v_before),
                 s.velocity(i.v_after),
                 s.energy(i.delta_k),
@@ -730,58 +794,112 @@ impl Model {
         values[var::last_impact_v_after] = va;
         values[var::last_impact_delta_k] = dk;
         values[var::plate_impulse] = s.mass * s.velocity(self.impulse);
-        Ok(())
     }
+}
 
-    /// First time derivative (SI) of the output `index`, for `x`, `v`, `z`, `zdot` (after
-    /// [`Model::sync`]).
-    pub fn output_derivative(&self, index: usize) -> Option<f64> {
-        let s = &self.scale;
-        let st = self.sim.state();
-        let zdd = self.sim.plate().motion(self.sim.instant()).2;
-        let a = match st.mode {
-            ContactMode::Sticking => zdd,
-            ContactMode::Free => -2.0 * self.sim.params().zeta() * st.v - potential::force(st.x),
-        };
-        Some(match index {
-            i if i == var::x => s.velocity(st.v),
-            i if i == var::v => s.acceleration(a),
-            i if i == var::z => s.velocity(st.zdot),
-            i if i == var::zdot => s.acceleration(zdd),
-            _ => return None,
+/// What both interfaces build from the parameters at the start time.
+pub struct Setup {
+    /// Unit conversions.
+    pub scale: Scale,
+    /// Plate source.
+    pub mode: ShakerMode,
+    /// `ζ`, `e`.
+    pub params: Params,
+    /// Solver settings (`tol`, the chatter rule).
+    pub opts: SolverOptions,
+    /// Phase reference (the plate in internal mode), phase 0 at the start time.
+    pub phase_ref: Sinusoid,
+    /// Start instant (`τ`).
+    pub origin: Instant,
+    /// Initial position and velocity (nondimensional).
+    pub x0: f64,
+    /// See `x0`.
+    pub v0: f64,
+}
+
+impl Setup {
+    /// Checks the parameters and converts them for a start at `t_start` (s).
+    pub fn of(values: &[f64], t_start: f64) -> Result<Self, String> {
+        let scale = Scale::of(values);
+        let mode = ShakerMode::of(values[var::shaker_mode])
+            .ok_or_else(|| format!("invalid shaker_mode = {}", values[var::shaker_mode]))?;
+        let params =
+            Params::new(values[var::zeta], values[var::e]).map_err(|e| describe_param(&e))?;
+        let opts =
+            SolverOptions::new(values[var::tol], chatter_rule()).map_err(|e| describe_param(&e))?;
+        let tau0 = scale.tau(t_start);
+        if !tau0.is_finite() {
+            return Err(format!("start time {t_start} s times omega0 is not finite"));
+        }
+        let origin = Instant::new(tau0);
+        let phase_ref = Sinusoid::new(values[var::Omega], values[var::V])
+            .and_then(|s| s.with_origin(origin, 0.0, 0.0))
+            .map_err(|e| describe_param(&e))?;
+        Ok(Self {
+            scale,
+            mode,
+            params,
+            opts,
+            phase_ref,
+            origin,
+            x0: values[var::x0] / scale.dx,
+            v0: values[var::v0] / (scale.omega0 * scale.dx),
         })
     }
+}
 
-    /// A line for the `logEvents` category (SI units, full precision).
-    pub fn describe_event(&self, e: &Event) -> String {
-        let s = &self.scale;
-        match *e {
-            Event::Impact(i) => format!(
-                "impact {} at t={:.17e} s phase={:.17e} x={:.17e} m v_before={:.17e} m/s v_after={:.17e} m/s",
-                i.index,
-                s.time(i.t),
-                self.phase_of(i.t, i.phase),
-                s.length(i.x),
-                s.velocity(i.v_before),
-                s.velocity(i.v_after)
-            ),
-            Event::StickStart { t, x, cause, .. } => format!(
-                "stick start at t={:.17e} s x={:.17e} m ({cause:?})",
-                s.time(t),
-                s.length(x)
-            ),
-            Event::StickEnd { t, x, .. } => format!(
-                "stick end at t={:.17e} s x={:.17e} m",
-                s.time(t),
-                s.length(x)
-            ),
-            Event::SnapThrough { t, to, .. } => format!(
-                "snap-through to well {} at t={:.17e} s",
-                to.number(),
-                s.time(t)
-            ),
-        }
+/// Refusal of an initial position below the plate position `z` (m).
+pub fn below_plate(values: &[f64], z: f64) -> String {
+    format!(
+        "x0 = {} m is below the plate position z = {z} m at the start time: the mass must start on or above the plate",
+        values[var::x0],
+    )
+}
+
+/// The plate record of a sinusoid.
+fn sinusoid_record(s: &Sinusoid) -> PlateRecord {
+    let (origin, phase0, offset) = s.origin();
+    PlateRecord::Sinusoid {
+        omega: s.omega(),
+        velocity: s.velocity(),
+        origin: origin.parts(),
+        phase0,
+        offset,
     }
+}
+
+/// A saved phase reference (see [`SavedModel::phase_ref`]) checked against the `(Ω, V)` in
+/// force `applied` and the current instant `now`.
+pub fn restore_phase_ref(
+    scale: &Scale,
+    (omega, v, hi, lo, phase0, offset): (f64, f64, f64, f64, f64, f64),
+    applied: (f64, f64),
+    now: Instant,
+) -> Result<Sinusoid, String> {
+    let origin = Instant::from_parts(hi, lo).ok_or("invalid phase origin in the FMU state")?;
+    if !(phase0.abs() <= std::f64::consts::PI && origin_in_range(omega, origin, now)) {
+        return Err(format!(
+            "the FMU state's phase reference (origin {} s, phase {phase0} rad) is out of range",
+            scale.time(origin.to_f64())
+        ));
+    }
+    // `(Ω, V)` in force were values of the parameters, so within their ranges.
+    let in_range =
+        |i: usize, x: f64| (crate::md::VARS[i].min..=crate::md::VARS[i].max).contains(&x);
+    let applied_ok = in_range(var::Omega, omega) && in_range(var::V, v);
+    if (omega, v) != applied || !applied_ok {
+        return Err("the FMU state's phase reference does not match its shaker or plate".into());
+    }
+    Sinusoid::new(omega, v)
+        .and_then(|s| s.with_origin(origin, phase0, offset))
+        .map_err(|e| describe_param(&e))
+}
+
+/// The parts of a phase reference an FMU state keeps (see [`SavedModel::phase_ref`]).
+pub fn save_phase_ref(s: &Sinusoid) -> (f64, f64, f64, f64, f64, f64) {
+    let (origin, phase0, offset) = s.origin();
+    let (hi, lo) = origin.parts();
+    (s.omega(), s.velocity(), hi, lo, phase0, offset)
 }
 
 /// Checks of a saved core state beyond the core's own (`Simulator::from_checkpoint`): angles
@@ -841,8 +959,8 @@ fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
 const MAX_SAVED_STEP: f64 = 64.0;
 
 /// The model at a communication point, to go back to when a step fails: core, phase reference,
-/// `(Ω, V)` in force, plate samples.
-type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory);
+/// `(Ω, V)` in force, plate samples, plate impulse.
+type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory, f64);
 
 /// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they
 /// gave the plate.
@@ -923,7 +1041,7 @@ pub struct SavedModel {
 /// inputs' extrapolation by the end of the step; `δ` is zero for inputs that extrapolate exactly.
 /// A step too short for the blend (its coefficients `∝ δ/len³` overflow) carries `δ` over to the
 /// next step. `z_now = None`: the plate starts at `z_in` (initialization).
-fn plate_piece(
+pub(crate) fn plate_piece(
     scale: &Scale,
     start: Instant,
     end: f64,

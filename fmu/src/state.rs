@@ -12,18 +12,21 @@ use bistable_core::{
     Well,
 };
 
-use crate::instance::Lifecycle;
+use crate::instance::{Interface, Lifecycle};
 use crate::md::GUID;
+use crate::me::{SavedMe, Tail};
 use crate::model::{PlateInputs, SavedModel, MAX_PLATE_ORDER};
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"BIFMUST\0";
 /// Format version; bump on any layout change.
-pub const VERSION: u32 = 2;
+pub const VERSION: u32 = 3;
 
 /// Everything an instance needs to continue exactly from a saved point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
+    /// Interface of the instance that made it (only such an instance accepts it).
+    pub interface: Interface,
     /// Lifecycle state.
     pub lifecycle: Lifecycle,
     /// Values of all variables (SI), in model-description order.
@@ -38,8 +41,10 @@ pub struct Snapshot {
     pub last_successful_time: f64,
     /// The slave asked to end the simulation.
     pub terminated: bool,
-    /// The running model, after initialization.
+    /// The running co-simulation model, after initialization.
     pub model: Option<SavedModel>,
+    /// The running Model Exchange model, after initialization.
+    pub me: Option<SavedMe>,
 }
 
 struct Writer(Vec<u8>);
@@ -142,14 +147,17 @@ fn checksum(bytes: &[u8]) -> u64 {
     })
 }
 
-const LIFECYCLES: [Lifecycle; 6] = [
+const LIFECYCLES: [Lifecycle; 8] = [
     Lifecycle::Instantiated,
     Lifecycle::InitializationMode,
     Lifecycle::StepComplete,
     Lifecycle::StepFailed,
     Lifecycle::Terminated,
     Lifecycle::Error,
+    Lifecycle::EventMode,
+    Lifecycle::ContinuousTimeMode,
 ];
+const INTERFACES: [Interface; 2] = [Interface::ModelExchange, Interface::CoSimulation];
 const CAUSES: [StickCause; 4] = [
     StickCause::Accumulation,
     StickCause::FixedGap,
@@ -170,6 +178,7 @@ impl Snapshot {
         w.u64(0); // total length, patched below
         w.u32(GUID.len() as u32);
         w.0.extend_from_slice(GUID.as_bytes());
+        w.u8(index_of(&INTERFACES, &self.interface));
         w.u8(index_of(&LIFECYCLES, &self.lifecycle));
         w.u32(self.values.len() as u32);
         self.values.iter().for_each(|&v| w.f64(v));
@@ -190,9 +199,9 @@ impl Snapshot {
                 w.u8(u8::from(*joined));
             }
             w.f64(m.impulse);
-            // Last, so that it stays at a fixed distance from the end of the buffer.
             w.f64(m.time);
         });
+        w.opt(self.me.as_ref(), put_me);
         let total = (w.0.len() + 8) as u64;
         w.0[12..20].copy_from_slice(&total.to_le_bytes());
         let sum = checksum(&w.0);
@@ -230,6 +239,7 @@ impl Snapshot {
                 String::from_utf8_lossy(guid)
             ));
         }
+        let interface = INTERFACES[usize::from(r.tag("interface", INTERFACES.len() as u8)?)];
         let lifecycle = LIFECYCLES[usize::from(r.tag("lifecycle", LIFECYCLES.len() as u8)?)];
         let n = r.u32()? as usize;
         if n != crate::md::VARS.len() {
@@ -244,6 +254,7 @@ impl Snapshot {
             *d = r.opt("input derivative", Reader::f64)?;
         }
         let snap = Snapshot {
+            interface,
             lifecycle,
             values,
             inputs,
@@ -261,6 +272,7 @@ impl Snapshot {
                     time: r.f64()?,
                 })
             })?,
+            me: r.opt("Model Exchange state", get_me)?,
         };
         if r.pos != body.len() {
             return Err(format!(
@@ -290,6 +302,87 @@ fn get_history(r: &mut Reader) -> Res<Vec<(Sample, bool)>> {
             Ok((Sample { t, z, zdot }, r.bool("plate sample joined")?))
         })
         .collect()
+}
+
+fn put_impact(w: &mut Writer, i: &Impact) {
+    w.u64(i.index);
+    w.f64(i.t);
+    w.opt(i.phase, Writer::f64);
+    w.f64(i.x);
+    w.f64(i.v_before);
+    w.f64(i.v_after);
+    w.f64(i.zdot);
+    w.f64(i.delta_k);
+}
+
+fn get_impact(r: &mut Reader) -> Res<Impact> {
+    Ok(Impact {
+        index: r.u64()?,
+        t: r.f64()?,
+        phase: r.opt("phase", Reader::f64)?,
+        x: r.f64()?,
+        v_before: r.f64()?,
+        v_after: r.f64()?,
+        zdot: r.f64()?,
+        delta_k: r.f64()?,
+    })
+}
+
+fn put_me(w: &mut Writer, m: &SavedMe) {
+    let (a, b, c, d, e, f) = m.phase_ref;
+    [a, b, c, d, e, f].iter().for_each(|&v| w.f64(v));
+    w.pair(m.applied);
+    w.f64(m.tau);
+    w.f64(m.event_tau);
+    w.f64(m.x);
+    w.f64(m.v);
+    w.u8(u8::from(m.contact == ContactMode::Sticking));
+    w.u8(u8::from(m.well == Well::Two));
+    w.u64(m.impacts);
+    w.u64(m.snap_throughs);
+    w.opt(m.last_impact.as_ref(), put_impact);
+    w.f64(m.impulse);
+    w.opt(m.tail.as_ref(), |w, t| {
+        w.f64(t.until);
+        w.u8(index_of(&CAUSES, &t.cause));
+        w.u64(t.impacts);
+        w.opt(t.last.as_ref(), put_impact);
+        w.f64(t.impulse);
+    });
+}
+
+fn get_me(r: &mut Reader) -> Res<SavedMe> {
+    Ok(SavedMe {
+        phase_ref: (r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?, r.f64()?),
+        applied: r.pair()?,
+        tau: r.f64()?,
+        event_tau: r.f64()?,
+        x: r.f64()?,
+        v: r.f64()?,
+        contact: if r.bool("contact mode")? {
+            ContactMode::Sticking
+        } else {
+            ContactMode::Free
+        },
+        well: if r.bool("well")? {
+            Well::Two
+        } else {
+            Well::One
+        },
+        impacts: r.u64()?,
+        snap_throughs: r.u64()?,
+        last_impact: r.opt("last impact", get_impact)?,
+        impulse: r.f64()?,
+        tail: r.opt("chatter tail", |r| {
+            Ok(Tail {
+                until: r.f64()?,
+                cause: CAUSES[usize::from(r.tag("stick cause", CAUSES.len() as u8)?)],
+                impacts: r.u64()?,
+                last: r.opt("last impact", get_impact)?,
+                impulse: r.f64()?,
+            })
+        })?,
+    })
 }
 
 fn put_checkpoint(w: &mut Writer, c: &Checkpoint) {
@@ -336,14 +429,7 @@ fn put_checkpoint(w: &mut Writer, c: &Checkpoint) {
     w.u8(u8::from(c.on_barrier));
     w.u8(u8::from(c.well == Well::Two));
     w.pair(c.now);
-    w.opt(c.last_impact, |w, i| {
-        w.u64(i.index);
-        w.f64(i.t);
-        w.opt(i.phase, Writer::f64);
-        [i.x, i.v_before, i.v_after, i.zdot, i.delta_k]
-            .iter()
-            .for_each(|&v| w.f64(v));
-    });
+    w.opt(c.last_impact.as_ref(), put_impact);
     w.opt(c.last_impact_t, Writer::pair);
     w.u32(c.short_flights);
     let s = c.stats;
@@ -408,18 +494,7 @@ fn get_checkpoint(r: &mut Reader) -> Res<Checkpoint> {
             Well::One
         },
         now: r.pair()?,
-        last_impact: r.opt("last impact", |r| {
-            Ok(Impact {
-                index: r.u64()?,
-                t: r.f64()?,
-                phase: r.opt("phase", Reader::f64)?,
-                x: r.f64()?,
-                v_before: r.f64()?,
-                v_after: r.f64()?,
-                zdot: r.f64()?,
-                delta_k: r.f64()?,
-            })
-        })?,
+        last_impact: r.opt("last impact", get_impact)?,
         last_impact_t: r.opt("last impact time", Reader::pair)?,
         short_flights: r.u32()?,
         stats: Stats {
@@ -455,6 +530,8 @@ mod tests {
             let mut m = Model::start(&values, &inputs, 0.0, &mut events).unwrap();
             m.step(t_end, &values, &inputs, &mut events).ok().unwrap();
             out.push(Snapshot {
+                interface: Interface::CoSimulation,
+                me: None,
                 lifecycle: Lifecycle::StepComplete,
                 values,
                 inputs,

@@ -77,7 +77,11 @@ impl Fmu {
     }
 
     fn new() -> Self {
-        let (c, log, callbacks) = Self::with_guid(GUID, fmi2CoSimulation);
+        Self::of(fmi2CoSimulation)
+    }
+
+    fn of(kind: fmi2Type) -> Self {
+        let (c, log, callbacks) = Self::with_guid(GUID, kind);
         assert!(!c.is_null());
         Fmu {
             c,
@@ -89,7 +93,12 @@ impl Fmu {
 
     /// Instantiated, parameters `(index, value)` set, initialized at `t = 0`.
     fn started(params: &[(usize, f64)]) -> Self {
-        let f = Self::new();
+        Self::started_as(fmi2CoSimulation, params)
+    }
+
+    /// [`Fmu::started`] for an instance of FMU type `kind` (Model Exchange: in event mode).
+    fn started_as(kind: fmi2Type, params: &[(usize, f64)]) -> Self {
+        let f = Self::of(kind);
         unsafe {
             assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
             f.set(params);
@@ -450,9 +459,11 @@ fn illegal_calls_and_bad_values_are_refused_with_a_reason() {
     let (c, log, _cb) = Fmu::with_guid("{00000000-0000-0000-0000-000000000000}", fmi2CoSimulation);
     assert!(c.is_null());
     assert!(log.lock().unwrap()[0].2.contains("does not match"));
-    let (c, log, _cb) = Fmu::with_guid(GUID, fmi2ModelExchange);
+    let (c, log, _cb) = Fmu::with_guid(GUID, 7);
     assert!(c.is_null());
-    assert!(log.lock().unwrap()[0].2.contains("co-simulation only"));
+    assert!(log.lock().unwrap()[0]
+        .2
+        .contains("must be fmi2ModelExchange = 0"));
 
     let mut f = Fmu::new();
     unsafe {
@@ -1089,4 +1100,257 @@ fn plate_impulse_is_the_momentum_of_the_steps_impacts() {
         with > 5 && without > 5,
         "{with} steps with impacts, {without} without"
     );
+}
+
+// ---- Model Exchange ----
+
+/// Settles the events of a Model Exchange instance in event mode and enters continuous-time
+/// mode; returns whether the states changed.
+fn me_events(f: &Fmu) -> bool {
+    let mut info = fmi2EventInfo::default();
+    unsafe {
+        assert_eq!(
+            fmi2NewDiscreteStates(f.c, &mut info),
+            fmi2OK,
+            "{:?}",
+            f.messages()
+        );
+        assert_eq!(info.newDiscreteStatesNeeded, fmi2False);
+        assert_eq!(fmi2EnterContinuousTimeMode(f.c), fmi2OK);
+    }
+    info.valuesOfContinuousStatesChanged != fmi2False
+}
+
+/// Fixed-step RK4 of a Model Exchange instance from its time `f.t` to `t_end` with step `h`,
+/// every sign change of an event indicator bisected to 1e-13 (time on its far side) and handled
+/// in event mode.
+fn me_run(f: &mut Fmu, t_end: f64, h: f64) {
+    let deriv = |f: &Fmu, t: f64, x: [f64; 2]| -> [f64; 2] {
+        let mut d = [0.0; 2];
+        unsafe {
+            assert_eq!(fmi2SetTime(f.c, t), fmi2OK, "{:?}", f.messages());
+            assert_eq!(fmi2SetContinuousStates(f.c, x.as_ptr(), 2), fmi2OK);
+            assert_eq!(fmi2GetDerivatives(f.c, d.as_mut_ptr(), 2), fmi2OK);
+        }
+        d
+    };
+    let rk4 = |f: &Fmu, t: f64, x: [f64; 2], h: f64| -> [f64; 2] {
+        let k1 = deriv(f, t, x);
+        let k2 = deriv(
+            f,
+            t + h / 2.0,
+            [x[0] + h / 2.0 * k1[0], x[1] + h / 2.0 * k1[1]],
+        );
+        let k3 = deriv(
+            f,
+            t + h / 2.0,
+            [x[0] + h / 2.0 * k2[0], x[1] + h / 2.0 * k2[1]],
+        );
+        let k4 = deriv(f, t + h, [x[0] + h * k3[0], x[1] + h * k3[1]]);
+        [
+            x[0] + h / 6.0 * (k1[0] + 2.0 * k2[0] + 2.0 * k3[0] + k4[0]),
+            x[1] + h / 6.0 * (k1[1] + 2.0 * k2[1] + 2.0 * k3[1] + k4[1]),
+        ]
+    };
+    let indicators = |f: &Fmu, t: f64, x: [f64; 2]| -> [f64; 2] {
+        let mut z = [0.0; 2];
+        unsafe {
+            assert_eq!(fmi2SetTime(f.c, t), fmi2OK);
+            assert_eq!(fmi2SetContinuousStates(f.c, x.as_ptr(), 2), fmi2OK);
+            assert_eq!(fmi2GetEventIndicators(f.c, z.as_mut_ptr(), 2), fmi2OK);
+        }
+        z
+    };
+    let crossed = |a: [f64; 2], b: [f64; 2]| (0..2).any(|i| (a[i] > 0.0) != (b[i] > 0.0));
+    while f.t < t_end {
+        let mut x = [0.0; 2];
+        unsafe { assert_eq!(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2), fmi2OK) };
+        let z0 = indicators(f, f.t, x);
+        let step = h.min(t_end - f.t);
+        let mut x1 = rk4(f, f.t, x, step);
+        let mut t1 = f.t + step;
+        if crossed(z0, indicators(f, t1, x1)) {
+            let (mut lo, mut hi) = (0.0, step);
+            while hi - lo > 1e-13 {
+                let mid = 0.5 * (lo + hi);
+                if crossed(z0, indicators(f, f.t + mid, rk4(f, f.t, x, mid))) {
+                    hi = mid;
+                } else {
+                    lo = mid;
+                }
+            }
+            t1 = f.t + hi;
+            x1 = rk4(f, f.t, x, hi);
+        }
+        let mut enter = fmi2False;
+        let mut terminate = fmi2False;
+        unsafe {
+            assert_eq!(fmi2SetTime(f.c, t1), fmi2OK);
+            assert_eq!(fmi2SetContinuousStates(f.c, x1.as_ptr(), 2), fmi2OK);
+            assert_eq!(
+                fmi2CompletedIntegratorStep(f.c, fmi2True, &mut enter, &mut terminate),
+                fmi2OK
+            );
+        }
+        f.t = t1;
+        if enter != fmi2False || t1 < f.t + step || crossed(z0, indicators(f, t1, x1)) {
+            unsafe { assert_eq!(fmi2EnterEventMode(f.c), fmi2OK) };
+            me_events(f);
+        }
+    }
+}
+
+#[test]
+fn model_exchange_with_rk4_and_bisection_finds_the_cores_impacts() {
+    let mut f = Fmu::started_as(fmi2ModelExchange, &[]);
+    unsafe { fmi2SetDebugLogging(f.c, fmi2True, 0, std::ptr::null()) };
+    me_events(&f);
+    me_run(&mut f, 30.0, 1e-3);
+    let logged: Vec<f64> = f
+        .messages()
+        .iter()
+        .filter_map(|m| m.strip_prefix("impact "))
+        .map(|m| {
+            m.split(" at t=")
+                .nth(1)
+                .unwrap()
+                .split(' ')
+                .next()
+                .unwrap()
+                .parse()
+                .unwrap()
+        })
+        .collect();
+    let core: Vec<f64> = core_sim(1.75, 0.07)
+        .events_until(30.0)
+        .unwrap()
+        .iter()
+        .filter_map(Event::impact)
+        .map(|i| i.t)
+        .collect();
+    assert_eq!(logged.len(), core.len());
+    assert_eq!(f.int(var::impact_count) as usize, core.len());
+    // RK4 with h = 1e-3: global error ~ h^4 = 1e-12 per unit time, amplified by the impacts'
+    // sensitivity (|dt/dx| = 1/|relative speed| ~ 1e2): 1e-8 s is a generous bound that a wrong
+    // impact law or plate (errors ~1e-3 and more) cannot meet.
+    for (a, b) in logged.iter().zip(&core) {
+        assert!((a - b).abs() < 1e-8, "impact at {a} s, core {b} s");
+    }
+}
+
+#[test]
+fn model_exchange_calls_follow_its_state_machine_and_interface() {
+    let cs = Fmu::started(&[]);
+    let mut info = fmi2EventInfo::default();
+    let mut x = [0.0; 2];
+    unsafe {
+        cs.assert_refused(
+            fmi2EnterEventMode(cs.c),
+            "not provided by a CoSimulation instance",
+        );
+        cs.assert_refused(fmi2NewDiscreteStates(cs.c, &mut info), "not provided");
+        cs.assert_refused(
+            fmi2GetContinuousStates(cs.c, x.as_mut_ptr(), 2),
+            "not provided",
+        );
+        cs.assert_refused(fmi2SetTime(cs.c, 1.0), "not provided");
+    }
+    let f = Fmu::of(fmi2ModelExchange);
+    unsafe {
+        assert_eq!(
+            fmi2GetNominalsOfContinuousStates(f.c, x.as_mut_ptr(), 2),
+            fmi2OK
+        );
+        assert_eq!(x, [1.0, 1.0]);
+        f.assert_refused(fmi2SetTime(f.c, 1.0), "not allowed in state Instantiated");
+        assert_eq!(fmi2SetupExperiment(f.c, 0, 0.0, 0.0, 0, 0.0), fmi2OK);
+        assert_eq!(fmi2EnterInitializationMode(f.c), fmi2OK);
+        assert_eq!(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2), fmi2OK);
+        assert_eq!(fmi2ExitInitializationMode(f.c), fmi2OK);
+        f.assert_refused(
+            fmi2DoStep(f.c, 0.0, 0.1, 0),
+            "not provided by a ModelExchange",
+        );
+        let d = [1.0];
+        f.assert_refused(
+            fmi2SetRealInputDerivatives(f.c, &vr(var::z_in), 1, &2, d.as_ptr()),
+            "not provided",
+        );
+        f.assert_refused(
+            fmi2SetContinuousStates(f.c, x.as_ptr(), 2),
+            "state EventMode",
+        );
+        f.assert_refused(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 3), "nx = 3");
+        let mut z = [0.0; 2];
+        f.assert_refused(fmi2GetEventIndicators(f.c, z.as_mut_ptr(), 1), "ni = 1");
+        // Impact 0 of the paper's start: v = (1 + e) V after the first event update.
+        assert!(me_events(&f));
+        assert_eq!(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2), fmi2OK);
+        let v_after = -0.85 * (0.0 - 0.07) + 0.07;
+        assert_eq!(x, [0.0, v_after]);
+        assert_eq!(f.int(var::impact_count), 1);
+        f.assert_refused(f.set(&[(var::Omega, 2.0)]), "only inputs can be set");
+        f.assert_refused(fmi2SetTime(f.c, -1.0), "not before the last event");
+        f.assert_refused(fmi2SetTime(f.c, f64::NAN), "must be finite");
+        let bad = [f64::INFINITY, 0.0];
+        f.assert_refused(
+            fmi2SetContinuousStates(f.c, bad.as_ptr(), 2),
+            "must be finite",
+        );
+        assert_eq!(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2), fmi2OK);
+        assert_eq!(x, [0.0, v_after], "a refusal leaves the states");
+        f.assert_refused(fmi2NewDiscreteStates(f.c, &mut info), "ContinuousTimeMode");
+        assert_eq!(fmi2EnterEventMode(f.c), fmi2OK);
+        assert_eq!(f.set(&[(var::Omega, 2.0)]), fmi2OK, "tunable in event mode");
+        f.assert_refused(f.set(&[(var::e, 0.5)]), "fixed parameter");
+        assert_eq!(fmi2Terminate(f.c), fmi2OK);
+        assert_eq!(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2), fmi2OK);
+        f.assert_refused(fmi2EnterEventMode(f.c), "state Terminated");
+    }
+}
+
+#[test]
+fn model_exchange_states_roll_back_and_refuse_the_other_interface() {
+    let mut f = Fmu::started_as(fmi2ModelExchange, &[(var::Omega, 0.3), (var::V, 0.05)]);
+    me_events(&f);
+    me_run(&mut f, 12.0, 2e-3);
+    let mut state: fmi2FMUstate = std::ptr::null_mut();
+    let snap = |f: &Fmu| {
+        let mut x = [0.0; 2];
+        unsafe { fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2) };
+        (x, f.int(var::impact_count), f.int(var::well))
+    };
+    unsafe {
+        assert_eq!(fmi2GetFMUstate(f.c, &mut state), fmi2OK);
+        me_run(&mut f, 20.0, 2e-3);
+        let first = snap(&f);
+        assert_eq!(fmi2SetFMUstate(f.c, state), fmi2OK);
+        f.t = 12.0;
+        me_run(&mut f, 20.0, 2e-3);
+        assert_eq!(first, snap(&f));
+
+        let mut size = 0;
+        assert_eq!(fmi2SerializedFMUstateSize(f.c, state, &mut size), fmi2OK);
+        let mut bytes = vec![0 as fmi2Byte; size];
+        assert_eq!(
+            fmi2SerializeFMUstate(f.c, state, bytes.as_mut_ptr(), size),
+            fmi2OK
+        );
+        let mut g = Fmu::of(fmi2ModelExchange);
+        let mut restored: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(
+            fmi2DeSerializeFMUstate(g.c, bytes.as_ptr(), size, &mut restored),
+            fmi2OK
+        );
+        assert_eq!(fmi2SetFMUstate(g.c, restored), fmi2OK);
+        g.t = 12.0;
+        me_run(&mut g, 20.0, 2e-3);
+        assert_eq!(first, snap(&g));
+        let cs = Fmu::new();
+        let mut other: fmi2FMUstate = std::ptr::null_mut();
+        let s = fmi2DeSerializeFMUstate(cs.c, bytes.as_ptr(), size, &mut other);
+        cs.assert_refused(s, "made by a ModelExchange instance");
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut state), fmi2OK);
+        assert_eq!(fmi2FreeFMUstate(g.c, &mut restored), fmi2OK);
+    }
 }

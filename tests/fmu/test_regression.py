@@ -1,4 +1,4 @@
-"""Co-simulation regression: each case of cases.py re-simulated through fmpy and compared with
+"""Regression: each case of cases.py re-simulated through fmpy and compared with
 its reference CSV (regenerate with `make fmu-reference`)."""
 import numpy as np
 import pytest

@@ -118,7 +118,10 @@ static void parse_vars(void) {
         attr(p, end, "valueReference", b, sizeof b);
         v->vr = (fmi2ValueReference)strtoul(b, NULL, 10);
         attr(p, end, "causality", b, sizeof b);
-        v->caus = strcmp(b, "output") == 0 ? C_OUTPUT : strcmp(b, "input") == 0 ? C_INPUT : C_PARAM;
+        /* Local variables (the state derivatives der_x, der_v) are computed like outputs. */
+        v->caus = strcmp(b, "output") == 0 || strcmp(b, "local") == 0 ? C_OUTPUT
+                  : strcmp(b, "input") == 0                           ? C_INPUT
+                                                                      : C_PARAM;
         v->tunable = attr(p, end, "variability", b, sizeof b) && strcmp(b, "tunable") == 0;
         const char *ty;
         if ((ty = strstr(p, "<Real")) && ty < end) {
@@ -477,9 +480,13 @@ static fmi2Status read_outputs(Inst *in, double *o) {
     return fmi2OK;
 }
 
+static const char *differs = "";
 static int same_outputs(const double *a, const double *b) {
     for (int k = 0; k < nv; k++)
-        if (vars[k].caus == C_OUTPUT && bits(a[k]) != bits(b[k])) return 0;
+        if (vars[k].caus == C_OUTPUT && bits(a[k]) != bits(b[k])) {
+            differs = vars[k].name;
+            return 0;
+        }
     return 1;
 }
 
@@ -505,8 +512,8 @@ static void observe(Inst *in, int unchanged, const char *after) {
     }
     physical(in, o);
     if (unchanged && m->out_ok)
-        check(same_outputs(o, m->out), "outputs changed by %s (which was refused or read only)",
-              after);
+        check(same_outputs(o, m->out), "outputs changed by %s (which was refused or read only): %s", after,
+              differs);
     if (m->life >= L_STEP && o[iCount] < in->count_floor)
         check(0, "impact_count fell from %g to %g along a run", in->count_floor, o[iCount]);
     in->count_floor = o[iCount];
@@ -633,7 +640,8 @@ static int instantiate(int k, int valid) {
     }
     const char *name = variant == 0 ? NULL : variant == 1 ? "" : in->name;
     const char *g = variant == 2 ? NULL : variant == 3 ? "{00000000-0000-0000-0000-000000000000}" : guid;
-    fmi2Type type = variant == 4 ? fmi2ModelExchange : fmi2CoSimulation;
+    /* variant 4: an unknown FMU type (Model Exchange instances are fuzzed by me_sequence) */
+    fmi2Type type = variant == 4 ? 2 + pick(100) : fmi2CoSimulation;
     const fmi2CallbackFunctions *cb =
         variant == 5 ? NULL : in->has_logger ? &cb_with_logger[k] : &cb_without_logger[k];
     fmi2Boolean logging = chance(0.2);
@@ -1522,7 +1530,7 @@ static void act_rollback(Inst *in) {
     }
     observe(target, 0, what);
     if (s1 == fmi2OK && s2 == fmi2OK && ok1 && tm->out_ok)
-        check(same_outputs(out1, tm->out), "the step repeated after a restore differs from the first (x %.17g vs %.17g)",
+        check(same_outputs(out1, tm->out), "the step repeated after a restore differs from the first in %s (x %.17g vs %.17g)", differs,
               tm->out[iX], out1[iX]);
 }
 
@@ -1544,9 +1552,10 @@ static int layout(const unsigned char *b, size_t n, Layout *L) {
     uint32_t g;
     memcpy(&g, b + 20, 4);
     size_t p = 24 + g;
-    if (p + 5 + 8 * (size_t)nv >= n) return 0;
-    L->life = p;
-    L->vals = p + 5;
+    /* interface byte, lifecycle byte, u32 count, values */
+    if (p + 6 + 8 * (size_t)nv >= n) return 0;
+    L->life = p + 1;
+    L->vals = p + 6;
     p = L->vals + 8 * (size_t)nv;
     for (int k = 0; k < 6; k++) {
         if (p >= n) return 0;
@@ -1566,8 +1575,9 @@ static int layout(const unsigned char *b, size_t n, Layout *L) {
     if (p >= n) return 0;
     L->has_model = b[p];
     L->model = p + 1;
-    L->end = n - 8;
-    return L->model <= L->end;
+    /* A co-simulation state ends with the absent Model Exchange part (tag 0) before the checksum. */
+    L->end = n - 9;
+    return L->model <= L->end && b[L->end] == 0;
 }
 
 static uint64_t fnv(const unsigned char *b, size_t n) {
@@ -1601,7 +1611,8 @@ static void meta_from_bytes(const unsigned char *b, size_t n, Meta *m) {
     m->last_ok = rdf(b + L.last);
     m->terminated = b[L.term] == 1;
     m->has_model = L.has_model;
-    m->t = L.has_model ? rdf(b + L.end - 8) : m->start;
+    /* A running model is at the last successful time (the FMU checks it). */
+    m->t = L.has_model ? m->last_ok : m->start;
 }
 
 static void act_buffers(Inst *in) {
@@ -1683,8 +1694,9 @@ static void act_buffers(Inst *in) {
         const char *field = "?";
         switch (kind) {
         case 0: {
-            int life = pick(8);
+            int life = pick(10);
             b[L.life] = (unsigned char)life;
+            /* 6, 7: Model Exchange states; 8, 9: unknown */
             must_fail = life >= 6 || (!L.has_model && life >= 2 && life <= 4);
             field = "lifecycle";
             break;
@@ -1878,6 +1890,356 @@ static void act(void) {
     }
 }
 
+/* ---- Model Exchange sequences ----
+ * One ME instance per seed driven through random legal and illegal calls: parameters (sane or
+ * random, in or out of range), initialization, integration chunks by the host's ME driver (RK4 +
+ * bisection, me.c) with random step sizes, random calls in any state with random arguments
+ * (NaN/inf times and states, NULL pointers, wrong array lengths), event modes entered at random
+ * times, FMU states taken, restored and serialized, terminate and reset. Oracle: the FMI 2.0 ME
+ * table of allowed calls (an illegal call or bad argument is fmi2Error with a logged reason and
+ * leaves the continuous states and counters bit for bit), and after every call in a readable state:
+ * finite states, indicators and derivatives, impact and snap-through counts that never decrease
+ * along a run, after an event mode the mass not below the plate (beyond 1e-9 relative) and the
+ * well on the side of the barrier the mass is on, a restored FMU state giving back its states and
+ * counts bit for bit. */
+enum { M_NONE, M_INST, M_INIT, M_EVENT, M_CONT, M_TERM };
+static const char *me_life[] = {"none", "Instantiated", "InitializationMode", "EventMode",
+                                "ContinuousTimeMode", "Terminated"};
+
+typedef struct {
+    fmi2Component c;
+    int life;
+    double t, next;     /* time, next time event */
+    double event_t;     /* time of the last event mode: SetTime may not go before it */
+    int wild;           /* a random (possibly extreme) parameter value was accepted */
+    int count, snaps;   /* counters seen last (never decrease along a run) */
+    fmi2FMUstate held;  /* one FMU state and what it held */
+    int held_life, held_wild;
+    double held_x[2], held_t;
+    int held_count;
+} MeInst;
+
+static MeInst M;
+
+/* Expected status of an ME call: OK if allowed in the oracle's state and `valid`, else Error. */
+static void me_expect(fmi2Status s, int allowed_mask, int valid, const char *what) {
+    int allowed = (allowed_mask >> M.life) & 1;
+    int want_ok = allowed && valid;
+    if (!allowed) cnt[N_STATE]++;
+    else if (!valid) cnt[N_INVALID]++;
+    check(s == (want_ok ? fmi2OK : fmi2Error), "ME %s in %s: status %d, expected %s", what,
+          me_life[M.life], s, want_ok ? "OK" : "Error");
+}
+
+#define ME_BIT(l) (1 << (l))
+#define ME_RUN (ME_BIT(M_EVENT) | ME_BIT(M_CONT))
+#define ME_READ (ME_BIT(M_INIT) | ME_RUN | ME_BIT(M_TERM))
+
+static int me_int(const char *name) {
+    fmi2ValueReference r = vr(name);
+    fmi2Integer n = -1;
+    F.fmi2GetInteger(M.c, &r, 1, &n);
+    return n;
+}
+
+static double me_real(const char *name) {
+    fmi2ValueReference r = vr(name);
+    fmi2Real x = NAN;
+    F.fmi2GetReal(M.c, &r, 1, &x);
+    return x;
+}
+
+/* The invariants of a readable instance; `settled`: just after an event mode. */
+static void me_observe(int settled) {
+    /* Initialization mode: the readers build the model from the parameters and refuse invalid
+     * ones (as the co-simulation outputs do). */
+    if (!((ME_READ >> M.life) & 1) || M.life == M_INIT) return;
+    double x[2] = {NAN, NAN}, z[2] = {NAN, NAN}, d[2] = {NAN, NAN};
+    /* Extreme parameters may overflow the derivatives or indicators: then only the calls. */
+    int sane = !M.wild;
+    check(F.fmi2GetContinuousStates(M.c, x, 2) == fmi2OK && (!sane || (isfinite(x[0]) && isfinite(x[1]))),
+          "ME states readable and finite");
+    check(F.fmi2GetEventIndicators(M.c, z, 2) == fmi2OK && (!sane || (isfinite(z[0]) && isfinite(z[1]))),
+          "ME event indicators readable and finite");
+    check(F.fmi2GetDerivatives(M.c, d, 2) == fmi2OK && (!sane || (isfinite(d[0]) && isfinite(d[1]))),
+          "ME derivatives readable and finite");
+    int n = me_int("impact_count"), sn = me_int("snap_through_count");
+    check(n >= M.count && sn >= M.snaps, "ME counts never decrease (%d after %d)", n, M.count);
+    if (!sane) return;
+    M.count = n, M.snaps = sn;
+    if (settled && M.life != M_INIT) {
+        double zp = me_real("z"), dx = me_real("delta_x");
+        int contact = 0;
+        fmi2ValueReference r = vr("in_contact");
+        F.fmi2GetBoolean(M.c, &r, 1, &contact);
+        double scale = fmax(dx, fmax(fabs(x[0]), fabs(zp)));
+        check(contact || x[0] - zp >= -1e-9 * scale, "ME mass above the plate after an event "
+              "(x - z = %g)", x[0] - zp);
+        int well = me_int("well");
+        check(fabs(x[0] - dx / 2) < 1e-9 * scale || well == (x[0] < dx / 2 ? 1 : 2),
+              "ME well %d agrees with x = %g", well, x[0]);
+    }
+    mix(bits(x[0])), mix(bits(x[1])), mix((uint64_t)n);
+}
+
+/* Sane parameters (Instantiated or initialization mode): moderate shaker, the paper's start. */
+static void me_sane(void) {
+    fmi2ValueReference r[4] = {vr("Omega"), vr("V"), vr("e"), vr("zeta")};
+    fmi2Real v[4] = {logu(0.2, 5), logu(0.01, 0.3), urange(0, 1), logu(1e-3, 0.5)};
+    check(F.fmi2SetReal(M.c, r, 4, v) == fmi2OK, "ME sane parameters accepted");
+}
+
+static void me_start(void) {
+    M = (MeInst){0};
+    M.c = F.fmi2Instantiate("mefuzz", fmi2ModelExchange, guid, NULL, &cb_with_logger[0], fmi2False,
+                            chance(0.5));
+    check(M.c != NULL, "ME instantiate");
+    M.life = M.c ? M_INST : M_NONE;
+    M.next = INFINITY;
+}
+
+static void me_act(void) {
+    cnt[N_CALLS]++;
+    double x[2], z[2], before[2] = {NAN, NAN}, after[2] = {NAN, NAN};
+    int readable = (ME_READ >> M.life) & 1;
+    int count_before = readable ? me_int("impact_count") : -1;
+    if (readable) F.fmi2GetContinuousStates(M.c, before, 2);
+    int refusal = 0; /* the call is expected to be refused: states must not change */
+    fmi2Status s;
+    switch (pick(16)) {
+    case 0: /* parameters */
+        if (M.life <= M_INIT && chance(0.7)) {
+            me_sane();
+        } else {
+            int naninf = 0, i = pick(nv);
+            double val = any_value(&I[0].m, i, &naninf);
+            fmi2ValueReference r = vars[i].vr;
+            if (vars[i].kind == K_REAL) s = F.fmi2SetReal(M.c, &r, 1, &val);
+            else { fmi2Integer iv = (fmi2Integer)val; s = F.fmi2SetInteger(M.c, &r, 1, &iv); }
+            refusal = s != fmi2OK;
+            if (naninf) cnt[N_NANINF]++;
+            if (s == fmi2OK) M.wild = 1;
+            check(s == fmi2OK || s == fmi2Error, "ME set: status %d", s);
+        }
+        break;
+    case 1:
+        s = F.fmi2SetupExperiment(M.c, fmi2False, 0, 0.0, fmi2False, 0);
+        me_expect(s, ME_BIT(M_INST), 1, "fmi2SetupExperiment");
+        refusal = s != fmi2OK;
+        break;
+    case 2:
+        s = F.fmi2EnterInitializationMode(M.c);
+        me_expect(s, ME_BIT(M_INST), 1, "fmi2EnterInitializationMode");
+        if (s == fmi2OK) M.life = M_INIT;
+        refusal = s != fmi2OK;
+        break;
+    case 3:
+        if (M.life == M_INIT && chance(0.8)) me_sane();
+        s = F.fmi2ExitInitializationMode(M.c);
+        check(s == fmi2OK || s == fmi2Error, "ME exit initialization: status %d", s);
+        if (M.life != M_INIT) check(s == fmi2Error, "ME exit initialization outside it refused");
+        if (s == fmi2OK) {
+            M.life = M_EVENT, M.t = M.event_t = 0;
+            check(me_settle(M.c, &M.next) == 0, "ME first event update");
+            M.life = M_CONT;
+            me_observe(1);
+        }
+        break;
+    case 4: case 5: case 6: /* integrate a chunk */
+        if (M.life == M_CONT) {
+            long events = 0;
+            double h = logu(1e-4, 0.05), t_end = M.t + h * (1 + pick(40));
+            int ok = me_run(M.c, M.t, t_end, h, M.next, &events) == 0;
+            check(ok || M.wild, "ME driver run to %g (sane parameters)", t_end);
+            if (!ok) { /* extreme parameters: a refused call ends the run, the instance stays usable */
+                double now_x[2];
+                check(F.fmi2GetContinuousStates(M.c, now_x, 2) == fmi2OK, "ME usable after a refusal");
+                F.fmi2SetTime(M.c, M.t); /* back to a time the oracle knows (or refused: stays) */
+                break;
+            }
+            M.t = t_end;
+            cnt[N_STEPS_OK]++;
+            /* Settle at the end of the run (the driver's last event may lie before it). */
+            if (F.fmi2EnterEventMode(M.c) == fmi2OK) {
+                M.life = M_EVENT, M.event_t = M.t;
+                check(me_settle(M.c, &M.next) == 0, "ME event update after a run");
+                M.life = M_CONT;
+            }
+            me_observe(1);
+        }
+        break;
+    case 7:
+        s = F.fmi2EnterEventMode(M.c);
+        me_expect(s, ME_RUN, 1, "fmi2EnterEventMode");
+        if (s == fmi2OK) M.life = M_EVENT, M.event_t = M.t;
+        refusal = s != fmi2OK;
+        break;
+    case 8: {
+        fmi2EventInfo info;
+        int null = chance(0.1);
+        s = F.fmi2NewDiscreteStates(M.c, null ? NULL : &info);
+        me_expect(s, ME_BIT(M_EVENT), !null, "fmi2NewDiscreteStates");
+        if (s == fmi2OK) {
+            check(!info.newDiscreteStatesNeeded && !info.terminateSimulation,
+                  "ME one event update settles the instant");
+            M.next = info.nextEventTimeDefined ? info.nextEventTime : INFINITY;
+            me_observe(1);
+        } else {
+            refusal = 1;
+        }
+        break;
+    }
+    case 9:
+        s = F.fmi2EnterContinuousTimeMode(M.c);
+        me_expect(s, ME_BIT(M_EVENT), 1, "fmi2EnterContinuousTimeMode");
+        if (s == fmi2OK) M.life = M_CONT;
+        refusal = s != fmi2OK;
+        break;
+    case 10: { /* time: now, before the last event, not finite, or far ahead */
+        int kind = pick(3);
+        double t = kind == 0 ? M.t : kind == 1 ? M.event_t - logu(1e-3, 10) : special();
+        if (kind == 2) cnt[N_NANINF]++;
+        s = F.fmi2SetTime(M.c, t);
+        if (((ME_RUN >> M.life) & 1) && (M.wild || (isfinite(t) && t >= M.event_t && t > M.t + 1e3)))
+            check(s == fmi2OK || s == fmi2Error, "ME set time far ahead: status %d", s);
+        else
+            /* Times within rounding (1e-9 relative) before the last event are accepted. */
+            me_expect(s, ME_RUN, isfinite(t) && t >= M.event_t - slack(M.event_t), "fmi2SetTime");
+        if (s == fmi2OK) check(F.fmi2SetTime(M.c, M.t) == fmi2OK, "ME time back to the run's");
+        refusal = 1; /* no state changes */
+        break;
+    }
+    case 11: { /* states: bad length, NULL, non-finite; valid ones put back unchanged */
+        int kind = pick(4);
+        x[0] = before[0], x[1] = before[1];
+        if (kind == 2) x[pick(2)] = special(), cnt[N_NANINF]++;
+        s = F.fmi2SetContinuousStates(M.c, kind == 1 ? NULL : x, kind == 0 ? 3 : 2);
+        if (kind == 1) cnt[N_NULL]++;
+        int valid = kind == 3 || (kind == 2 && isfinite(x[0]) && isfinite(x[1]));
+        if (kind == 2 && valid && M.life == M_CONT)
+            check(s == fmi2OK || s == fmi2Error, "ME huge states: %d", s); /* may overflow scaling */
+        else me_expect(s, ME_BIT(M_CONT), valid, "fmi2SetContinuousStates");
+        if (s == fmi2OK && kind == 2) F.fmi2SetContinuousStates(M.c, before, 2);
+        refusal = s != fmi2OK;
+        break;
+    }
+    case 12: { /* readers with bad lengths or NULL */
+        int kind = pick(3), n = kind == 0 ? 1 + 2 * pick(2) : 2;
+        double *p = kind == 1 ? NULL : z;
+        if (kind == 1) cnt[N_NULL]++;
+        int which = pick(4);
+        s = which == 0   ? F.fmi2GetEventIndicators(M.c, p, n)
+            : which == 1 ? F.fmi2GetDerivatives(M.c, p, n)
+            : which == 2 ? F.fmi2GetContinuousStates(M.c, p, n)
+                         : F.fmi2GetNominalsOfContinuousStates(M.c, p, n);
+        me_expect(s, which == 3 ? (ME_READ | ME_BIT(M_INST)) : ME_READ, kind == 2, "ME reader");
+        refusal = 1; /* readers never change the states */
+        break;
+    }
+    case 13: { /* fmi2CompletedIntegratorStep, NULL outputs sometimes */
+        fmi2Boolean enter, term;
+        int null = chance(0.2);
+        s = F.fmi2CompletedIntegratorStep(M.c, fmi2True, null ? NULL : &enter, &term);
+        me_expect(s, ME_BIT(M_CONT), !null, "fmi2CompletedIntegratorStep");
+        refusal = 1;
+        break;
+    }
+    case 14: { /* FMU states: take, restore (round trip through bytes sometimes) */
+        if (!M.held || chance(0.4)) {
+            if (M.held) F.fmi2FreeFMUstate(M.c, &M.held);
+            s = F.fmi2GetFMUstate(M.c, &M.held);
+            check(s == fmi2OK && M.held, "ME fmi2GetFMUstate");
+            M.held_life = M.life, M.held_count = me_int("impact_count"), M.held_t = M.t;
+            M.held_wild = M.wild;
+            memcpy(M.held_x, before, sizeof before);
+            refusal = 1;
+        } else {
+            fmi2FMUstate use = M.held, fresh = NULL;
+            unsigned char *b = NULL;
+            if (chance(0.5)) {
+                size_t n = 0;
+                F.fmi2SerializedFMUstateSize(M.c, M.held, &n);
+                b = malloc(n);
+                check(b && F.fmi2SerializeFMUstate(M.c, M.held, (fmi2Byte *)b, n) == fmi2OK &&
+                          F.fmi2DeSerializeFMUstate(M.c, (fmi2Byte *)b, n, &fresh) == fmi2OK,
+                      "ME serialize round trip");
+                if (fresh) use = fresh;
+                cnt[N_ROUNDTRIP]++;
+            }
+            if (F.fmi2SetFMUstate(M.c, use) != fmi2OK) {
+                check(0, "ME fmi2SetFMUstate of a held state");
+                if (fresh) F.fmi2FreeFMUstate(M.c, &fresh);
+                free(b);
+                return;
+            }
+            cnt[N_ROLLBACK]++;
+            M.life = M.held_life, M.wild = M.held_wild;
+            M.count = 0, M.snaps = 0;
+            if ((ME_READ >> M.life) & 1) {
+                F.fmi2GetContinuousStates(M.c, after, 2);
+                check(bits(after[0]) == bits(M.held_x[0]) && bits(after[1]) == bits(M.held_x[1]) &&
+                          me_int("impact_count") == M.held_count,
+                      "ME restored state gives back its states and counts bit for bit");
+            }
+            if (fresh) F.fmi2FreeFMUstate(M.c, &fresh);
+            free(b);
+            /* The restored time is that of the state; settle there. */
+            M.next = INFINITY, M.t = M.event_t = M.held_t;
+            if (M.life == M_CONT || M.life == M_EVENT) {
+                if (F.fmi2EnterEventMode(M.c) == fmi2OK) {
+                    M.life = M_EVENT;
+                    check(me_settle(M.c, &M.next) == 0, "ME event update after a restore");
+                    M.life = M_CONT;
+                }
+            }
+            return;
+        }
+        break;
+    }
+    default: /* terminate, reset, free */
+        if (chance(0.5)) {
+            s = F.fmi2Terminate(M.c);
+            me_expect(s, ME_RUN, 1, "fmi2Terminate");
+            if (s == fmi2OK) M.life = M_TERM;
+            refusal = s != fmi2OK;
+        } else if (chance(0.7)) {
+            check(F.fmi2Reset(M.c) == fmi2OK, "ME reset");
+            M.life = M_INST, M.count = M.snaps = M.wild = 0, M.next = INFINITY, M.t = 0;
+            return;
+        } else {
+            if (M.held) F.fmi2FreeFMUstate(M.c, &M.held);
+            F.fmi2FreeInstance(M.c);
+            cnt[N_REINST]++;
+            me_start();
+            return;
+        }
+    }
+    if (refusal && readable && ((ME_READ >> M.life) & 1)) {
+        F.fmi2GetContinuousStates(M.c, after, 2);
+        check(bits(after[0]) == bits(before[0]) && bits(after[1]) == bits(before[1]) &&
+                  me_int("impact_count") == count_before,
+              "ME refused or reading call leaves states and counts");
+    }
+    me_observe(0);
+}
+
+/* An ME call sequence of `ncalls` calls on one instance (re-instantiated at times). */
+static void me_sequence(long ncalls) {
+    expected_env = &I[0];
+    expected_name = "mefuzz";
+    me_start();
+    for (long k = 0; k < ncalls && M.c; k++, call_now++) {
+        arm();
+        if (trace) printf("me call %ld in %s\n", k, me_life[M.life]);
+        me_act();
+    }
+    if (M.c) {
+        if (M.held) F.fmi2FreeFMUstate(M.c, &M.held);
+        F.fmi2FreeInstance(M.c);
+    }
+    M.c = NULL;
+}
+
 static void run_seed(unsigned long seed, long ncalls) {
     rng_state = seed ^ 0x5eedf00d5eedf00dULL;
     rng_state = rnd() ^ rnd(); /* decorrelate neighbouring seeds */
@@ -1895,6 +2257,7 @@ static void run_seed(unsigned long seed, long ncalls) {
     for (int k = 0; k < 2; k++)
         if (I[k].c) free_instance(k);
     for (int j = 0; j < nbuf; j++) free(bufs[j].b), bufs[j].b = NULL;
+    me_sequence(ncalls / 4);
     struct itimerval off = {{0, 0}, {0, 0}};
     setitimer(ITIMER_REAL, &off, NULL);
     if (!quiet || seed_failures)

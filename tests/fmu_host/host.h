@@ -25,7 +25,11 @@
     X(fmi2DeSerializeFMUstate) X(fmi2GetDirectionalDerivative)                               \
     X(fmi2SetRealInputDerivatives) X(fmi2GetRealOutputDerivatives) X(fmi2DoStep)             \
     X(fmi2CancelStep) X(fmi2GetStatus) X(fmi2GetRealStatus) X(fmi2GetIntegerStatus)          \
-    X(fmi2GetBooleanStatus) X(fmi2GetStringStatus)
+    X(fmi2GetBooleanStatus) X(fmi2GetStringStatus) X(fmi2EnterEventMode)                   \
+    X(fmi2NewDiscreteStates) X(fmi2EnterContinuousTimeMode) X(fmi2CompletedIntegratorStep)  \
+    X(fmi2SetTime) X(fmi2SetContinuousStates) X(fmi2GetDerivatives)                          \
+    X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                                     \
+    X(fmi2GetNominalsOfContinuousStates)
 
 struct fmi_table {
 #define FIELD(f) __typeof__(&f) f;
@@ -44,6 +48,26 @@ extern char guid[64];
 fmi2ValueReference vr(const char *name);
 /* Monotonic wall time (s). */
 double now(void);
+
+/* ---- test helpers (host.c) ---- */
+/* Callbacks with the host's variadic logger: it keeps the last message and, for every logged
+ * "impact N at t=T s ..." line, stores T in impact_t[N] (when N < MAX_IMPACTS). */
+extern fmi2CallbackFunctions callbacks;
+#define MAX_IMPACTS 8192
+extern double impact_t[MAX_IMPACTS];
+/* Counts a passed or failed check (printing the failure with the last log message). */
+void hcheck(int ok, const char *what);
+/* An expected refusal: fmi2Error and a logged message containing `needle`. */
+void hrefused(fmi2Status s, const char *needle, const char *what);
+
+/* `host test`, Model Exchange part (me.c): the ME driver against co-simulation, illegal calls. */
+void me_tests(void);
+/* The ME driver (me.c): settles an event (fmi2NewDiscreteStates until done, then continuous-time
+ * mode), `*next` the next time event or INFINITY; 0 on success. */
+int me_settle(fmi2Component c, double *next);
+/* The ME driver: continuous-time mode from t0 to t_end with RK4 steps h, indicator sign changes
+ * bisected to 1e-12 s, time event at `next`; `*events` counts event modes. 0 on success. */
+int me_run(fmi2Component c, double t0, double t_end, double h, double next, long *events);
 
 /* `host fuzz` (fuzz.c): arguments after the mode and the two paths. */
 int fuzz_main(const char *seeds, const char *ncalls);

@@ -31,27 +31,11 @@ pub(crate) fn decide(
     since: Option<f64>,
     zeno: bool,
 ) -> Decision {
-    if w_plus == 0.0 {
-        return if force > 0.0 {
-            Decision::StickAfter(0.0, StickCause::Plastic)
-        } else {
-            Decision::Fly
-        };
+    if let Some((delay, cause)) = rule.stick_delay(e, w_plus, force, since) {
+        return Decision::StickAfter(delay, cause);
     }
-    match rule {
-        ChatterRule::Accumulation { horizon } => {
-            if force > 0.0 && e < 1.0 {
-                let delta = 2.0 * w_plus / (force * (1.0 - e));
-                if delta <= horizon {
-                    return Decision::StickAfter(delta, StickCause::Accumulation);
-                }
-            }
-        }
-        ChatterRule::FixedGap { gap } => {
-            if force >= 0.0 && since.is_some_and(|d| d < gap) {
-                return Decision::StickAfter(0.0, StickCause::FixedGap);
-            }
-        }
+    if w_plus == 0.0 {
+        return Decision::Fly;
     }
     if zeno {
         return if force >= 0.0 {

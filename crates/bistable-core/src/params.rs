@@ -5,6 +5,8 @@
 
 use std::fmt;
 
+use crate::events::StickCause;
+
 /// A parameter that failed validation: which one, the value given and the rule it broke.
 #[derive(Debug, Clone, PartialEq)]
 pub struct ParamError {
@@ -75,6 +77,22 @@ impl Params {
     pub fn restitution(&self) -> f64 {
         self.restitution
     }
+
+    /// Free-flight acceleration `x'' = −2ζx' − U'(x)` (Eq. 4) at position `x`, velocity `v`.
+    pub fn flight_acceleration(&self, x: f64, v: f64) -> f64 {
+        -2.0 * self.zeta * v - crate::potential::force(x)
+    }
+
+    /// Contact force per unit mass `N = z̈ + 2ζż + U'(z)` (Eq. 9) of a mass riding a plate at
+    /// `z` moving with `ż`, `z̈`: the mass stays on the plate while `N ≥ 0`.
+    pub fn contact_force(&self, z: f64, zdot: f64, zddot: f64) -> f64 {
+        zddot + 2.0 * self.zeta * zdot + crate::potential::force(z)
+    }
+
+    /// Impact law (Eq. 5) on the relative velocity `w = x' − ż`: `w₊ = −e·w₋`.
+    pub fn rebound(&self, w_minus: f64) -> f64 {
+        -self.restitution * w_minus
+    }
 }
 
 /// How a chatter sequence (impacts accumulating in finite time) is ended and turned into sticking.
@@ -101,6 +119,38 @@ impl ChatterRule {
     /// The paper's `1e-9` fixed-gap rule, for comparison with its figures.
     pub fn paper() -> Self {
         ChatterRule::FixedGap { gap: 1e-9 }
+    }
+
+    /// Whether this rule ends a chatter sequence after an impact with rebound relative velocity
+    /// `w_plus ≥ 0`, contact force `force` (Eq. 9) and time `since` the previous impact (`e`: the
+    /// coefficient of restitution): the time to ride on the plate before sticking (0: at once)
+    /// and the cause, or `None` (free flight).
+    pub fn stick_delay(
+        self,
+        e: f64,
+        w_plus: f64,
+        force: f64,
+        since: Option<f64>,
+    ) -> Option<(f64, StickCause)> {
+        if w_plus == 0.0 {
+            return (force > 0.0).then_some((0.0, StickCause::Plastic));
+        }
+        match self {
+            ChatterRule::Accumulation { horizon } => {
+                if force > 0.0 && e < 1.0 {
+                    let delta = 2.0 * w_plus / (force * (1.0 - e));
+                    if delta <= horizon {
+                        return Some((delta, StickCause::Accumulation));
+                    }
+                }
+            }
+            ChatterRule::FixedGap { gap } => {
+                if force >= 0.0 && since.is_some_and(|d| d < gap) {
+                    return Some((0.0, StickCause::FixedGap));
+                }
+            }
+        }
+        None
     }
 
     fn validate(self) -> Result<Self, ParamError> {

@@ -897,7 +897,7 @@ impl Simulator {
     ) -> Result<ControlFlow<()>, SimError> {
         let e = self.params.restitution();
         let (z, zd, zdd) = self.plate.motion(t1);
-        let w_plus = -e * w_minus;
+        let w_plus = self.params.rebound(w_minus);
         let v_before = w_minus + zd;
         let v_after = w_plus + zd;
         let imp = Impact {
@@ -921,7 +921,7 @@ impl Simulator {
         self.u0 = 0.0;
         self.w0 = w_plus;
         self.pinned = if w_plus == 0.0 { 2 } else { 1 };
-        let force = zdd + 2.0 * self.params.zeta() * zd + potential::force(z);
+        let force = self.params.contact_force(z, zd, zdd);
         if let Some(v) = self.var.as_mut() {
             // Saltation matrix (model.md Sec. 4): S = [[−e, 0], [−(1+e)N/w₋, −e]].
             let s21 = if w_minus < 0.0 {
