@@ -15,6 +15,7 @@ use crate::me::Me;
 use crate::model::{
     Model, PlateInputs, StepFailure, MAX_CLOCK_SPAN, MAX_PLATE_ORDER, MAX_STEP_SPAN,
 };
+use crate::num::Num;
 use crate::state::Snapshot;
 
 /// Which FMI 2.0 interface an instance provides (the `fmuType` of `fmi2Instantiate`).
@@ -271,18 +272,20 @@ impl Instance {
         tolerance: Option<f64>,
     ) -> Outcome {
         if !start.is_finite() {
-            return Err(format!("startTime = {start} s must be finite"));
+            return Err(format!("startTime = {} s must be finite", Num(start)));
         }
         if let Some(stop) = stop {
             if !(stop.is_finite() && stop >= start) {
                 return Err(format!(
-                    "stopTime = {stop} s must be finite and >= startTime = {start} s"
+                    "stopTime = {} s must be finite and >= startTime = {} s",
+                    Num(stop),
+                    Num(start)
                 ));
             }
         }
         if let Some(tol) = tolerance {
             if !(tol.is_finite() && tol > 0.0) {
-                return Err(format!("tolerance = {tol} must be finite and > 0"));
+                return Err(format!("tolerance = {} must be finite and > 0", Num(tol)));
             }
             self.log(
                 fmi2OK,
@@ -494,8 +497,9 @@ impl Instance {
             }
             if !value.is_finite() {
                 return Err(format!(
-                    "derivative of order {order} of {} = {value} must be finite",
-                    label(i)
+                    "derivative of order {order} of {} = {} must be finite",
+                    label(i),
+                    Num(value)
                 ));
             }
             checked.push((order as usize + shift, value));
@@ -942,23 +946,38 @@ fn clock_span(values: &[f64], start: f64, t_end: f64) -> f64 {
 fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>, span: f64, step_span: f64) -> String {
     let t_end = tc + h;
     if !(h.is_finite() && h > 0.0) {
-        format!("communicationStepSize = {h} s must be finite and > 0")
+        format!(
+            "communicationStepSize = {} s must be finite and > 0",
+            Num(h)
+        )
     } else if !tc.is_finite() || (tc - now).abs() > slack(now) {
-        format!("currentCommunicationPoint = {tc} s does not match the FMU's time {now} s")
+        format!(
+            "currentCommunicationPoint = {} s does not match the FMU's time {} s",
+            Num(tc),
+            Num(now)
+        )
     } else if t_end <= now {
-        format!("the step ends at {t_end} s, not after the FMU's time {now} s")
+        format!(
+            "the step ends at {} s, not after the FMU's time {} s",
+            Num(t_end),
+            Num(now)
+        )
     } else if span >= MAX_CLOCK_SPAN {
         format!(
-            "the step ends at {t_end} s, {span:e} shaker radians (time units when Omega < 1) after the start time: beyond the FMU's clock range of 2^52"
+            "the step ends at {} s, {span:e} shaker radians (time units when Omega < 1) after the start time: beyond the FMU's clock range of 2^52",
+            Num(t_end)
         )
     } else if step_span > MAX_STEP_SPAN {
         format!(
-            "the step from {now} s to {t_end} s spans {step_span:e} shaker radians (time units when Omega < 1), more than {MAX_STEP_SPAN:e} in one fmi2DoStep: its cost grows with its length, split it into shorter steps"
+            "the step from {} s to {} s spans {step_span:e} shaker radians (time units when Omega < 1), more than {MAX_STEP_SPAN:e} in one fmi2DoStep: its cost grows with its length, split it into shorter steps",
+            Num(now),
+            Num(t_end)
         )
     } else {
         format!(
-            "the step ends at {t_end} s, beyond stopTime = {} s",
-            stop.unwrap_or(f64::NAN)
+            "the step ends at {} s, beyond stopTime = {} s",
+            Num(t_end),
+            Num(stop.unwrap_or(f64::NAN))
         )
     }
 }
@@ -976,15 +995,16 @@ fn check_range(i: usize, value: f64) -> Result<f64, String> {
         Ok(value)
     } else {
         Err(format!(
-            "{} = {value}{unit} is out of range: must be {}in [{}, {}]{unit}",
+            "{} = {}{unit} is out of range: must be {}in [{}, {}]{unit}",
             v.name,
+            Num(value),
             if v.kind == Kind::Real {
                 "finite and "
             } else {
                 ""
             },
-            v.min,
-            v.max
+            Num(v.min),
+            Num(v.max)
         ))
     }
 }

@@ -12,4 +12,5 @@ pub mod instance;
 pub mod md;
 pub mod me;
 pub mod model;
+pub mod num;
 pub mod state;

@@ -14,6 +14,7 @@ use bistable_core::{
 };
 
 use crate::md::var;
+use crate::num::Num;
 
 /// Highest plate derivative that an external piece carries (degree of `PolyPiece`).
 pub const MAX_PLATE_ORDER: usize = bistable_core::shaker::MAX_POLY_DEGREE;
@@ -851,8 +852,9 @@ impl Setup {
 /// Refusal of an initial position below the plate position `z` (m).
 pub fn below_plate(values: &[f64], z: f64) -> String {
     format!(
-        "x0 = {} m is below the plate position z = {z} m at the start time: the mass must start on or above the plate",
-        values[var::x0],
+        "x0 = {} m is below the plate position z = {} m at the start time: the mass must start on or above the plate",
+        Num(values[var::x0]),
+        Num(z),
     )
 }
 

@@ -1039,12 +1039,17 @@ fn a_state_driven_far_out_of_scope_ends_in_a_discard_not_a_hang() {
     // Found by the setters fuzz target as a timeout: V = 1e6 (its maximum) and a step of
     // 10,900 s; with a flat budget of 1e7 core steps the Discard took 6 s (a minute under the
     // sanitizer). The budget now grows with the step's span: 1e6 core steps here.
+    // The work is bounded by that budget (no wall-clock assertion: timing belongs in benchmarks):
+    // 100,000 + 50 per radian of the span 10,900 x 1.75.
     let mut g = Fmu::started(&[(var::V, 1e6)]);
-    let t0 = std::time::Instant::now();
     let s = g.step(10900.0);
-    assert!(t0.elapsed().as_secs_f64() < 3.0, "{:?}", t0.elapsed());
     assert_eq!(s, fmi2Discard);
-    assert!(g.messages().join("\n").contains("integration steps"));
+    let budget = 100_000 + (50.0 * 10900.0 * 1.75) as u64;
+    let msg = g.messages().join("\n");
+    assert!(
+        msg.contains(&format!("more than {budget} integration steps")),
+        "{msg}"
+    );
 }
 
 /// `plate_impulse` is `mass·Σ(v_before − v_after)` over the impacts logged in each step (SI: the
