@@ -9,9 +9,10 @@ use std::time::Instant as WallClock;
 use clap::{ArgGroup, Args};
 use serde::Serialize;
 
+use bistable_analysis::Model;
 use bistable_core::{ContactMode, Event, Impact, Observer, State};
 
-use crate::common::{positive, Chatter, CommonArgs, Model};
+use crate::common::{positive, Chatter, CommonArgs};
 use crate::error::CliError;
 use crate::output::{num, print_json, print_text, sibling, CsvFile, Field};
 use crate::plot::{self, PlotData, Sample};
@@ -426,7 +427,7 @@ struct Plan {
 
 impl Plan {
     fn new(args: &SimulateArgs) -> Result<Self, CliError> {
-        let model = Model::from_args(&args.common)?;
+        let model = args.common.model()?;
         let t_end = match (args.t_end, args.periods) {
             (Some(t), _) => positive("--t-end", t)?,
             (None, Some(n)) => positive("--periods", n)? * TAU,
@@ -642,7 +643,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         zeta: model.params.zeta(),
         restitution: model.restitution(),
         tol: model.opts.tol(),
-        chatter: model.chatter,
+        chatter: args.common.model.chatter,
         t_end,
         natural_periods: t_end / TAU,
         shaker_periods: t_end / model.shaker_period(),
