@@ -15,9 +15,10 @@
 //! use bistable_analysis::{cycles, period, Model};
 //! use bistable_core::{Params, Sinusoid, SolverOptions};
 //! let model = Model::new(Params::paper(), Sinusoid::new(1.75, 0.07).unwrap(), SolverOptions::default());
+//! // 600 shaker periods of transient, then 8 recorded with 64 samples each.
 //! let c = cycles::steady_cycles(&model, 600, 8, 64).unwrap();
-//! assert_eq!(period::detect_period(&c.sections, 16, 1e-7), None); // 9 sections: too few
-//! assert_eq!(period::distinct(&c.max_x, 1e-9), 1); // period 1: the same maximum every cycle
+//! assert_eq!(period::detect_period(&c.sections, 16, 1e-7), Some(1));
+//! assert_eq!(period::distinct(&c.max_x, 1e-9), 1); // the same maximum every cycle
 //! ```
 #![warn(missing_docs)]
 
@@ -32,6 +33,7 @@ pub mod orbit;
 pub mod parallel;
 pub mod period;
 pub mod progress;
+pub mod schedule;
 pub mod seeds;
 pub mod spectrum;
 pub mod sweep;
