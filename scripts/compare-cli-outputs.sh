@@ -80,6 +80,9 @@ record() { # BIN DIR
     run bad_range map --omega-range 0:1:3 --velocity-range 0.1:0.2:2 --out x.csv
     run bad_period orbit --omega 1 --velocity 0.1 --period 0
     run bad_samples bifurcation --param omega --range 1:2:3 --velocity 0.1 --samples 4 --json
+    run bad_record spectrum --omega 2 --velocity 0.1 --record 0
+    run bad_spectrum_samples spectrum --omega 2 --velocity 0.1 --samples 3
+    run bad_threads map --omega-range 1:2:2 --velocity-range 0.1:0.2:2 --out x.csv --threads 0
   )
   # Wall-clock figures vary from run to run; map's class counts are a hash map printed in
   # an arbitrary order (sorted here, trailing commas dropped).

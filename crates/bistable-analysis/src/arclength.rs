@@ -8,6 +8,8 @@
 //! central difference (the map runs from plate phase 0 to plate phase 0, so changing Ω also
 //! changes its duration `2πp/Ω`).
 
+use std::num::NonZeroU32;
+
 use bistable_core::shooting::eigenvalues;
 use bistable_core::{Event, SimError, Simulator, Sinusoid};
 
@@ -17,7 +19,7 @@ use crate::seeds::Seed;
 use crate::Model;
 
 /// Samples per shaker period for the largest displacement of a traced orbit.
-const SAMPLES: u32 = 128;
+const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
 /// A seeded orbit within this distance (max norm in `x`, `x'`) of a trace is already on it.
 const COVERED: f64 = 5e-3;
 

@@ -2,6 +2,8 @@
 //! varied), the recorded steady state of each point, its period, and the branches of periodic
 //! orbits seeded from the attractors and continued along the grid.
 
+use std::num::NonZeroU32;
+
 use bistable_core::SimError;
 
 use crate::branches::{self, Branches};
@@ -17,10 +19,10 @@ use crate::Model;
 pub struct BifurcationOptions {
     /// Shaker periods skipped as transient.
     pub transient: u32,
-    /// Shaker periods recorded after the transient (>= 1).
+    /// Shaker periods recorded after the transient.
     pub record: u32,
-    /// Dense-output samples per shaker period for the maximum of `x` (>= 1).
-    pub samples: u32,
+    /// Dense-output samples per shaker period for the maximum of `x`.
+    pub samples: NonZeroU32,
     /// Periods (shaker periods) of the orbit branches to find; empty: no branches.
     pub branch_periods: Vec<u32>,
 }

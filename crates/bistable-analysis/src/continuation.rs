@@ -2,6 +2,8 @@
 //! seeded from simulated attractors at every grid point, then followed by natural continuation
 //! on the grid or by pseudo-arclength continuation through folds.
 
+use std::num::NonZeroU32;
+
 use bistable_core::SimError;
 
 use crate::arclength::{self, ArcOptions, ArcPoint};
@@ -14,7 +16,7 @@ use crate::seeds::{seeds_from, Seed};
 use crate::Model;
 
 /// Samples per shaker period of the seeding simulations (only their sections are used).
-const SEED_SAMPLES: u32 = 16;
+const SEED_SAMPLES: NonZeroU32 = NonZeroU32::new(16).expect("16 > 0");
 
 /// How the orbits are followed in Ω.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]

@@ -2,6 +2,8 @@
 //! of the impacts, and the stroboscopic section points (plate phase 0), for bifurcation
 //! diagrams, orbit seeds and orbit analysis.
 
+use std::num::NonZeroU32;
+
 use bistable_core::{Event, SimError, Simulator, Sinusoid};
 
 use crate::parallel::{self, Threads};
@@ -21,7 +23,7 @@ pub struct Cycles {
 }
 
 /// Records `cycles` shaker cycles of `sim`, which must stand at the section instant
-/// `plate.section(first)`. The maximum of `x` in a cycle comes from `samples` (>= 1)
+/// `plate.section(first)`. The maximum of `x` in a cycle comes from `samples`
 /// dense-output samples per cycle, refined by the cubic Hermite interpolant of `(x, x')` on
 /// each interval where `x'` changes sign from + to − with no impact in between (error
 /// `O(h⁴)`). Samples sit at the same plate phases in every cycle, so a periodic response
@@ -31,8 +33,9 @@ pub fn record_cycles(
     plate: Sinusoid,
     first: u64,
     cycles: u32,
-    samples: u32,
+    samples: NonZeroU32,
 ) -> Result<Cycles, SimError> {
+    let samples = samples.get();
     let h = plate.period() / f64::from(samples);
     let mut out = Cycles::default();
     let st = sim.state();
@@ -109,7 +112,7 @@ pub fn steady_cycles(
     model: &Model,
     transient: u32,
     cycles: u32,
-    samples: u32,
+    samples: NonZeroU32,
 ) -> Result<Cycles, SimError> {
     let mut sim = settled(model, transient)?;
     record_cycles(
@@ -127,7 +130,7 @@ pub fn steady_cycles_over<E: From<SimError>>(
     models: &[Model],
     transient: u32,
     cycles: u32,
-    samples: u32,
+    samples: NonZeroU32,
     threads: Threads,
     progress: &mut OnProgress<'_, E>,
 ) -> Result<Vec<Cycles>, E> {
@@ -173,7 +176,8 @@ mod tests {
             Sinusoid::new(1.75, 0.07).unwrap(),
             SolverOptions::default(),
         );
-        let c = steady_cycles(&model, 600, 6, 128).unwrap();
+        let n = |k| NonZeroU32::new(k).unwrap();
+        let c = steady_cycles(&model, 600, 6, n(128)).unwrap();
         assert_eq!(c.max_x.len(), 6);
         assert_eq!(c.sections.len(), 7);
         assert_eq!(distinct(&c.max_x, 1e-9), 1, "{:?}", c.max_x);
@@ -184,7 +188,7 @@ mod tests {
             1
         );
         // The refined maximum beats the plain samples by a little, never by much.
-        let coarse = steady_cycles(&model, 600, 1, 16).unwrap().max_x[0];
+        let coarse = steady_cycles(&model, 600, 1, n(16)).unwrap().max_x[0];
         assert!(c.max_x[0] >= coarse - 1e-9 && c.max_x[0] - coarse < 1e-3);
         assert!(
             (coarse - c.max_x[0]).abs() < 1e-6,

@@ -13,10 +13,11 @@
 //!
 //! ```
 //! use bistable_analysis::{cycles, period, Model};
+//! use std::num::NonZeroU32;
 //! use bistable_core::{Params, Sinusoid, SolverOptions};
 //! let model = Model::new(Params::paper(), Sinusoid::new(1.75, 0.07).unwrap(), SolverOptions::default());
 //! // 600 shaker periods of transient, then 8 recorded with 64 samples each.
-//! let c = cycles::steady_cycles(&model, 600, 8, 64).unwrap();
+//! let c = cycles::steady_cycles(&model, 600, 8, NonZeroU32::new(64).unwrap()).unwrap();
 //! assert_eq!(period::detect_period(&c.sections, 16, 1e-7), Some(1));
 //! assert_eq!(period::distinct(&c.max_x, 1e-9), 1); // the same maximum every cycle
 //! ```

@@ -2,13 +2,15 @@
 //! what the analyses derive from them: per-cycle maxima, section points, Floquet exponent and
 //! the `det M` consistency check.
 
+use std::num::NonZeroU32;
+
 use bistable_core::{PeriodicOrbit, ShootError, ShootOptions, SimError};
 
 use crate::cycles::record_cycles;
 use crate::Model;
 
 /// Samples per shaker period for the orbits' per-cycle maxima.
-const SAMPLES: u32 = 128;
+const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
 /// Two orbits are the same when a section point of one is this close to the other's fixed
 /// point (max norm in `(x, x')`).
 const SAME: f64 = 1e-6;

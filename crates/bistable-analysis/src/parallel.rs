@@ -18,7 +18,8 @@ impl Threads {
 
     /// One thread per core (2 if the number of cores is unknown).
     pub fn all() -> Self {
-        Self(std::thread::available_parallelism().unwrap_or(NonZeroUsize::MIN.saturating_add(1)))
+        const UNKNOWN: NonZeroUsize = NonZeroUsize::new(2).expect("2 > 0");
+        Self(std::thread::available_parallelism().unwrap_or(UNKNOWN))
     }
 
     /// The number of threads.

@@ -1,6 +1,8 @@
 //! The amplitude spectrum of the steady-state displacement, to tell periodic responses (lines at
 //! multiples of Ω/p) from chaotic ones (a broadband floor).
 
+use std::num::NonZeroU32;
+
 use rustfft::num_complex::Complex;
 use rustfft::FftPlanner;
 
@@ -15,10 +17,10 @@ use crate::Model;
 pub struct SpectrumOptions {
     /// Shaker periods skipped as transient.
     pub transient: u32,
-    /// Shaker periods sampled (>= 1; the frequency resolution is Ω/record).
-    pub record: u32,
-    /// Samples per shaker period (>= 1; the Nyquist frequency is samples/2 in units of Ω).
-    pub samples: u32,
+    /// Shaker periods sampled (the frequency resolution is Ω/record).
+    pub record: NonZeroU32,
+    /// Samples per shaker period (the Nyquist frequency is samples/2 in units of Ω).
+    pub samples: NonZeroU32,
 }
 
 /// The spectrum of the steady state at one point.
@@ -36,17 +38,18 @@ impl Spectrum {
     /// Runs the paper's initial condition at `model`, skips the transient, samples `x`
     /// uniformly (from the dense output) and takes the spectrum.
     pub fn compute(model: &Model, o: SpectrumOptions) -> Result<Self, SimError> {
+        let (record, samples) = (o.record.get(), o.samples.get());
         let plate = model.shaker;
         let first = u64::from(o.transient);
         let mut sim = settled(model, o.transient)?;
-        let h = plate.period() / f64::from(o.samples);
-        let mut x = Vec::with_capacity((o.record * o.samples) as usize);
-        let mut sections = Vec::with_capacity(o.record as usize + 1);
+        let h = plate.period() / f64::from(samples);
+        let mut x = Vec::with_capacity(record as usize * samples as usize);
+        let mut sections = Vec::with_capacity(record as usize + 1);
         let st = sim.state();
         sections.push((st.x, st.v));
-        for c in 0..u64::from(o.record) {
+        for c in 0..u64::from(record) {
             let start = plate.section(first + c);
-            for j in 0..o.samples {
+            for j in 0..samples {
                 if j > 0 {
                     sim.advance_instant(start + f64::from(j) * h, &mut |_: &Event| {})?;
                 }
@@ -56,7 +59,7 @@ impl Spectrum {
             let st = sim.state();
             sections.push((st.x, st.v));
         }
-        let bins = amplitude_spectrum(&x, o.record);
+        let bins = amplitude_spectrum(&x, record);
         let peak = bins
             .iter()
             .skip(1)

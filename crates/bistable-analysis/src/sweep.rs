@@ -1,5 +1,5 @@
 //! Classification sweeps: the response class (paper Sec. 3.4, the core's
-//! [`bistable_core::classify`]) at every point of a list of shaker points `(Ω, V)`, on several
+//! [`bistable_core::classify()`]) at every point of a list of shaker points `(Ω, V)`, on several
 //! threads, each result handed to the caller as it completes.
 
 use std::time::Instant as WallClock;

@@ -177,7 +177,7 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let (models, range) = grid(args)?;
     CliError::at_least("--record", args.record, 1)?;
-    CliError::at_least("--samples", args.samples, 8)?;
+    let samples = CliError::count("--samples", args.samples, 8)?;
     if let Some(&p) = args
         .branch_periods
         .iter()
@@ -193,7 +193,7 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
     let options = BifurcationOptions {
         transient: args.transient,
         record: args.record,
-        samples: args.samples,
+        samples,
         branch_periods: if args.no_branches {
             Vec::new()
         } else {

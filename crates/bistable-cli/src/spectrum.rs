@@ -91,8 +91,8 @@ struct Summary {
 /// Runs `bistable spectrum`.
 pub fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     let model = args.common.model()?;
-    CliError::at_least("--record", args.record, 8)?;
-    CliError::at_least("--samples", args.samples, 4)?;
+    let record = CliError::count("--record", args.record, 8)?;
+    let samples = CliError::count("--samples", args.samples, 4)?;
     if u64::from(args.record) * u64::from(args.samples) > 1 << 26 {
         return Err(CliError::invalid_text(
             "--record",
@@ -118,8 +118,8 @@ pub fn run(args: &SpectrumArgs) -> Result<(), CliError> {
         &model,
         SpectrumOptions {
             transient: args.transient,
-            record: args.record,
-            samples: args.samples,
+            record,
+            samples,
         },
     )?;
     let flat = flatness(&spec, max_f);
