@@ -9,13 +9,18 @@ use clap::{ArgGroup, Args, ValueEnum};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use crate::attractor::{detect_period, distinct, steady_cycles, Cycles};
-use crate::branches::{self, Branches, Seed};
-use crate::common::{Model, ModelArgs};
+use bistable_analysis::bifurcation::{self, Bifurcation, BifurcationOptions};
+use bistable_analysis::branches::Branches;
+use bistable_analysis::cycles::Cycles;
+use bistable_analysis::period::distinct;
+use bistable_analysis::Model;
+
+use crate::branches;
+use crate::common::{threads, ModelArgs};
 use crate::error::CliError;
 use crate::output::{print_json, print_text, sibling, CsvFile, Field};
-use crate::parallel;
 use crate::plot::{self, header, Area, DrawResult, Mark};
+use crate::progress::StageBars;
 use crate::ranges::Range;
 
 /// Long description shown by `bistable bifurcation --help`.
@@ -172,7 +177,7 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
     let start = std::time::Instant::now();
     let (models, range) = grid(args)?;
     CliError::at_least("--record", args.record, 1)?;
-    CliError::at_least("--samples", args.samples, 8)?;
+    let samples = CliError::count("--samples", args.samples, 8)?;
     if let Some(&p) = args
         .branch_periods
         .iter()
@@ -184,36 +189,23 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
             "periods must be in [1, 64]",
         ));
     }
-    let threads = parallel::threads(args.threads, "--threads")?;
-
-    let mut points: Vec<Option<Cycles>> = vec![None; models.len()];
-    parallel::run(
-        &models,
-        threads,
-        &format!("simulating {} points", models.len()),
-        |m| steady_cycles(m, args.transient, args.record, args.samples),
-        |i, c| {
-            points[i] = Some(c?);
-            Ok(())
+    let threads = threads(args.threads, "--threads")?;
+    let options = BifurcationOptions {
+        transient: args.transient,
+        record: args.record,
+        samples,
+        branch_periods: if args.no_branches {
+            Vec::new()
+        } else {
+            args.branch_periods.clone()
         },
-    )?;
-    let points: Vec<Cycles> = points.into_iter().flatten().collect();
-    let periods: Vec<Option<usize>> = points
-        .iter()
-        .map(|c| detect_period(&c.sections, 16, 1e-7))
-        .collect();
-
-    let branches = if args.no_branches || args.branch_periods.is_empty() {
-        Vec::new()
-    } else {
-        let seeds: Vec<Seed> = points
-            .iter()
-            .zip(&periods)
-            .enumerate()
-            .flat_map(|(i, (c, &p))| branches::seeds_from(i, &c.sections, p, &args.branch_periods))
-            .collect();
-        branches::build(&models, &args.branch_periods, &seeds, threads)?
     };
+    let mut bars = StageBars::new("");
+    let Bifurcation {
+        points,
+        periods,
+        branches,
+    } = bifurcation::compute(&models, &options, threads, &mut |p| bars.report(p))?;
 
     let mut files = Vec::new();
     if let Some(path) = &args.out {
@@ -248,7 +240,7 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
             .map(|b| OrbitCount {
                 period: b.period,
                 orbits: b.len(),
-                stable: b.slots.iter().flatten().filter(|o| o.orbit.stable).count(),
+                stable: b.stable(),
                 links: b.links.len(),
             })
             .collect(),
@@ -294,8 +286,8 @@ fn grid(args: &BifurcationArgs) -> Result<(Vec<Model>, Range), CliError> {
         .values()
         .into_iter()
         .map(|p| match args.param {
-            Param::Omega => Model::new(&args.model, p, fixed),
-            Param::Velocity => Model::new(&args.model, fixed, p),
+            Param::Omega => args.model.model(p, fixed),
+            Param::Velocity => args.model.model(fixed, p),
         })
         .collect::<Result<Vec<_>, _>>()?;
     Ok((models, range))
@@ -414,7 +406,7 @@ fn draw(
         ),
     };
     let mut legend = vec![(Mark::Dot(DOTS, 3), "simulated response".to_string())];
-    for b in branches.iter().filter(|b| b.len() > 0) {
+    for b in branches.iter().filter(|b| !b.is_empty()) {
         legend.push((
             Mark::Line(period_colour(b.period), 3),
             format!("P-{} orbits, stable", b.period),

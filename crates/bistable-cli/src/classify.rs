@@ -1,14 +1,13 @@
 //! `bistable classify`: the response class at one point `(Ω, V)` (paper Sec. 3.4), and the
 //! classification options and record shared with `bistable map`.
 
-use std::time::Instant as WallClock;
-
 use clap::Args;
 use serde::Serialize;
 
-use bistable_core::{Classification, ClassifyOptions};
+use bistable_analysis::sweep::{classify_point, Classified};
+use bistable_core::ClassifyOptions;
 
-use crate::common::{CommonArgs, Model};
+use crate::common::CommonArgs;
 use crate::error::CliError;
 use crate::output::{print_json, Field};
 
@@ -176,13 +175,14 @@ pub const CSV_COLUMNS: [&str; 16] = [
 ];
 
 impl Record {
-    /// The record of a classification at `model`'s point.
-    pub fn new(model: &Model, c: &Classification, wall_time_s: f64) -> Self {
+    /// The record of a classified point.
+    pub fn new(point: &Classified) -> Self {
+        let (m, c) = (&point.model, &point.classification);
         Self {
-            omega: model.omega(),
-            velocity: model.velocity(),
-            zeta: model.params.zeta(),
-            restitution: model.restitution(),
+            omega: m.omega(),
+            velocity: m.velocity(),
+            zeta: m.params.zeta(),
+            restitution: m.restitution(),
             class: c.class.name().to_string(),
             period: c.period,
             chaotic: c.chaotic,
@@ -194,15 +194,8 @@ impl Record {
             sticking: c.sticking,
             periods_simulated: c.periods_simulated,
             stopped_early: c.stopped_early,
-            wall_time_s,
+            wall_time_s: point.wall_time_s,
         }
-    }
-
-    /// Classifies `model`'s point and times it.
-    pub fn classify(model: &Model, co: ClassifyOptions) -> Result<Self, CliError> {
-        let start = WallClock::now();
-        let c = bistable_core::classify(model.params, model.shaker, model.opts, co)?;
-        Ok(Self::new(model, &c, start.elapsed().as_secs_f64()))
     }
 
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
@@ -276,11 +269,11 @@ impl Record {
 
 /// Runs `bistable classify`.
 pub fn run(args: &ClassifyCmdArgs) -> Result<(), CliError> {
-    let model = Model::from_args(&args.common)?;
+    let model = args.common.model()?;
     let co = args
         .classify
         .options(ClassifyOptions::default().lyapunov_periods)?;
-    print_json(&Record::classify(&model, co)?)
+    print_json(&Record::new(&classify_point(&model, co)?))
 }
 
 #[cfg(test)]

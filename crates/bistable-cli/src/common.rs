@@ -1,9 +1,11 @@
-//! Options shared by every subcommand, and the validated model built from them.
+//! Options shared by every subcommand, and the validated model and thread count built from
+//! them.
 
 use clap::{Args, ValueEnum};
 use serde::Serialize;
 
-use bistable_core::{ChatterRule, Params, Simulator, Sinusoid, SolverOptions};
+use bistable_analysis::{Model, Threads};
+use bistable_core::{ChatterRule, Params, Sinusoid, SolverOptions};
 
 use crate::error::CliError;
 
@@ -92,89 +94,31 @@ impl CommonArgs {
     pub fn json(&self) -> bool {
         self.model.json
     }
-}
 
-/// A validated model: parameters, shaker and solver options.
-#[derive(Debug, Clone, Copy)]
-pub struct Model {
-    /// `ζ` and `e`.
-    pub params: Params,
-    /// The plate's sinusoid.
-    pub shaker: Sinusoid,
-    /// Tolerance and chatter rule.
-    pub opts: SolverOptions,
-    /// The chatter rule as chosen on the command line.
-    pub chatter: Chatter,
-}
-
-impl Model {
-    /// Validates the common options; the error names the offending option and its range.
-    pub fn from_args(args: &CommonArgs) -> Result<Self, CliError> {
-        Self::new(&args.model, args.omega, args.velocity)
+    /// The validated model at `--omega`, `--velocity`; the error names the offending option and
+    /// its range.
+    pub fn model(&self) -> Result<Model, CliError> {
+        self.model.model(self.omega, self.velocity)
     }
+}
 
+impl ModelArgs {
     /// Validates `--omega`, `--velocity` and the model options, in the order they are
     /// documented, so the first bad one is reported.
-    pub fn new(args: &ModelArgs, omega: f64, velocity: f64) -> Result<Self, CliError> {
+    pub fn model(&self, omega: f64, velocity: f64) -> Result<Model, CliError> {
         let shaker = Sinusoid::new(omega, velocity)?;
-        let params = Params::new(args.zeta, args.restitution)?;
-        let opts = SolverOptions::new(args.tol, args.chatter.rule())?;
-        Ok(Self {
-            params,
-            shaker,
-            opts,
-            chatter: args.chatter,
-        })
+        let params = Params::new(self.zeta, self.restitution)?;
+        let opts = SolverOptions::new(self.tol, self.chatter.rule())?;
+        Ok(Model::new(params, shaker, opts))
     }
+}
 
-    /// The same model at another shaker point `(Ω, V)`.
-    pub fn at(&self, omega: f64, velocity: f64) -> Result<Self, CliError> {
-        Ok(Self {
-            shaker: Sinusoid::new(omega, velocity)?,
-            ..*self
-        })
-    }
-
-    /// A simulator at the paper's initial condition (mass at rest at x = 0, τ = 0).
-    pub fn simulator(&self) -> Result<Simulator, CliError> {
-        Ok(Simulator::new(self.params, self.shaker.into(), self.opts)?)
-    }
-
-    /// `Ω`.
-    pub fn omega(&self) -> f64 {
-        self.shaker.omega()
-    }
-
-    /// `V`.
-    pub fn velocity(&self) -> f64 {
-        self.shaker.velocity()
-    }
-
-    /// `e`.
-    pub fn restitution(&self) -> f64 {
-        self.params.restitution()
-    }
-
-    /// Shaker period `2π/Ω` (time units).
-    pub fn shaker_period(&self) -> f64 {
-        self.shaker.period()
-    }
-
-    /// `ΔK0 = ½((1+e)V)²` (Eq. 11), the energy gain of the first impact.
-    pub fn delta_k0(&self) -> f64 {
-        let w = (1.0 + self.restitution()) * self.velocity();
-        0.5 * w * w
-    }
-
-    /// Short description for plot titles: `Ω = 1.75, V = 0.07, ζ = 0.02, e = 0.85`.
-    pub fn label(&self) -> String {
-        format!(
-            "Ω = {}, V = {}, ζ = {}, e = {}",
-            self.omega(),
-            self.velocity(),
-            self.params.zeta(),
-            self.restitution()
-        )
+/// The number of worker threads: `requested` (validated, the error names `option`) or all
+/// cores.
+pub fn threads(requested: Option<usize>, option: &str) -> Result<Threads, CliError> {
+    match requested {
+        Some(n) => Threads::new(n).ok_or_else(|| CliError::invalid_text(option, n, "must be >= 1")),
+        None => Ok(Threads::all()),
     }
 }
 

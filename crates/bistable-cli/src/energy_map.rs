@@ -7,9 +7,9 @@ use std::path::PathBuf;
 use clap::Args;
 use plotters::prelude::*;
 
-use bistable_core::Event;
+use bistable_analysis::energy::{self, grazing, neutral, EnergyMap, ImpactPoint};
 
-use crate::common::{positive, Model, ModelArgs};
+use crate::common::{positive, ModelArgs};
 use crate::error::CliError;
 use crate::output::print_text;
 use crate::plot::{self, header, Area, DrawResult, Mark, FONT};
@@ -87,17 +87,6 @@ pub struct EnergyMapArgs {
     pub model: ModelArgs,
 }
 
-/// `ΔK/ΔK0` of an impact at phase angle `phi` with pre-impact velocity `u·V` (Eq. 13).
-pub fn energy_ratio(e: f64, phi: f64, u: f64) -> f64 {
-    let after = (1.0 + e) * phi.cos() - e * u;
-    (after * after - u * u) / ((1.0 + e) * (1.0 + e))
-}
-
-/// `u` of the neutral line `ΔK = 0` other than the grazing line (Eq. 14).
-pub fn neutral(e: f64, phi: f64) -> f64 {
-    -(1.0 + e) / (1.0 - e) * phi.cos()
-}
-
 fn parse_span(text: &str) -> Result<(f64, f64), CliError> {
     let bad = || CliError::invalid_text("--u-range", text, "expected LO:HI with LO < HI");
     let (a, b) = text.split_once(':').ok_or_else(bad)?;
@@ -123,15 +112,14 @@ pub fn run(args: &EnergyMapArgs) -> Result<(), CliError> {
         ));
     }
     let span = args.u_range.as_deref().map(parse_span).transpose()?;
-    // (phase in cycles, u, time fraction) of the overlaid impacts.
-    let mut impacts: Vec<(f64, f64, f64)> = Vec::new();
+    let mut impacts: Vec<ImpactPoint> = Vec::new();
     let mut overlay_label = None;
     if args.overlay {
         let (w, v) = (
             args.omega.unwrap_or(f64::NAN),
             args.velocity.unwrap_or(f64::NAN),
         );
-        let model = Model::new(&args.model, w, v)?;
+        let model = args.model.model(w, v)?;
         if model.velocity() <= 0.0 {
             return Err(CliError::invalid(
                 "--velocity",
@@ -140,14 +128,7 @@ pub fn run(args: &EnergyMapArgs) -> Result<(), CliError> {
             ));
         }
         let t_end = positive("--periods", args.periods)? * TAU;
-        let mut sim = model.simulator()?;
-        sim.advance_to(t_end, &mut |ev: &Event| {
-            if let Event::Impact(i) = ev {
-                if let Some(ph) = i.phase {
-                    impacts.push((ph, i.v_before / model.velocity(), i.t / t_end));
-                }
-            }
-        })?;
+        impacts = energy::impacts(&model, t_end)?;
         overlay_label = Some(format!(
             "{} impacts of the run at Ω = {w}, V = {v} over {} natural periods",
             impacts.len(),
@@ -159,7 +140,7 @@ pub fn run(args: &EnergyMapArgs) -> Result<(), CliError> {
         let lo = if impacts.is_empty() {
             1.15 * neutral(e, 0.0)
         } else {
-            impacts.iter().map(|i| i.1).fold(-1.0, f64::min)
+            impacts.iter().map(|i| i.u).fold(-1.0, f64::min)
         };
         (lo - 0.08 * (1.5 - lo), 1.5)
     });
@@ -191,7 +172,7 @@ fn draw(
     root: &Area<'_>,
     e: f64,
     (lo, hi): (f64, f64),
-    impacts: &[(f64, f64, f64)],
+    impacts: &[ImpactPoint],
     overlay: Option<&str>,
 ) -> DrawResult {
     let mut legend = vec![
@@ -228,33 +209,24 @@ fn draw(
         "pre-impact velocity x'₋/V",
         None,
     )?;
-    // The values shown, for the colour scale.
-    let (nx, ny) = (360usize, 300usize);
-    let cell = |i: usize, n: usize, a: f64, b: f64| a + (b - a) * (i as f64 + 0.5) / n as f64;
-    let mut vmax: f64 = 1.0;
-    for i in 0..nx {
-        for j in 0..ny {
-            let (ph, u) = (cell(i, nx, 0.0, 1.0), cell(j, ny, lo, hi));
-            if u <= (TAU * ph).cos() {
-                vmax = vmax.max(energy_ratio(e, TAU * ph, u).abs());
-            }
-        }
-    }
+    let map = EnergyMap::new(e, (lo, hi), 360, 300);
+    let (nx, ny) = map.size();
+    let vmax = map.max_abs();
     let scale = compress(vmax);
     let (dx, dy) = (1.0 / nx as f64, (hi - lo) / ny as f64);
     let mut cells = Vec::with_capacity(nx * ny);
     for i in 0..nx {
         for j in 0..ny {
-            let (ph, u) = (cell(i, nx, 0.0, 1.0), cell(j, ny, lo, hi));
-            let colour = if u > (TAU * ph).cos() {
-                let stripe = ((i + j) / 3) % 2 == 0;
-                if stripe {
-                    RGBColor(150, 150, 150)
-                } else {
-                    RGBColor(205, 205, 205)
+            let colour = match map.value(i, j) {
+                Some(r) => diverging(compress(r) / scale),
+                None => {
+                    let stripe = ((i + j) / 3) % 2 == 0;
+                    if stripe {
+                        RGBColor(150, 150, 150)
+                    } else {
+                        RGBColor(205, 205, 205)
+                    }
                 }
-            } else {
-                diverging(compress(energy_ratio(e, TAU * ph, u)) / scale)
             };
             let x0 = i as f64 * dx;
             let y0 = lo + j as f64 * dy;
@@ -271,7 +243,7 @@ fn draw(
         for k in 0..=1440 {
             let ph = f64::from(k) / 1440.0;
             let u = f(TAU * ph);
-            if u >= lo && u <= hi && u <= (TAU * ph).cos() + 1e-12 {
+            if u >= lo && u <= hi && u <= grazing(TAU * ph) + 1e-12 {
                 out.last_mut().expect("one piece").push((ph, u));
             } else if out.last().is_some_and(|p| !p.is_empty()) {
                 out.push(Vec::new());
@@ -282,15 +254,15 @@ fn draw(
     for piece in pieces(&|phi| neutral(e, phi)) {
         plot::thick_line(&mut chart, &piece, NEUTRAL, 2)?;
     }
-    for piece in pieces(&|phi| phi.cos()) {
+    for piece in pieces(&grazing) {
         plot::thick_line(&mut chart, &piece, GRAZING, 3)?;
     }
     let r = if impacts.len() > 3000 { 2 } else { 3 };
     chart.draw_series(
         impacts
             .iter()
-            .filter(|i| i.1 >= lo && i.1 <= hi)
-            .map(|&(ph, u, s)| Circle::new((ph, u), r, plot::ramp(s).filled())),
+            .filter(|i| i.u >= lo && i.u <= hi)
+            .map(|i| Circle::new((i.phase, i.u), r, plot::ramp(i.time_fraction).filled())),
     )?;
     colour_bar(&right, vmax, scale)
 }
@@ -332,27 +304,4 @@ fn colour_bar(area: &Area<'_>, vmax: f64, scale: f64) -> DrawResult {
         plot::left((FONT, 17).into_font().color(&BLACK)),
     ))?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn energy_ratio_of_the_first_impact_and_the_neutral_lines() {
-        let e = 0.85;
-        // The first impact (mass at rest, plate at full speed) is the unit.
-        assert!((energy_ratio(e, 0.0, 0.0) - 1.0).abs() < 1e-15);
-        for phi in [0.0, 0.3, 1.0, 2.0, 3.0] {
-            // Both lines of Eq. 14 have ΔK = 0 …
-            assert!(energy_ratio(e, phi, phi.cos()).abs() < 1e-14);
-            assert!(energy_ratio(e, phi, neutral(e, phi)).abs() < 1e-12);
-            // … and between them the impact adds energy when cos φ > 0.
-            if phi.cos() > 0.0 {
-                let mid = 0.5 * (phi.cos() + neutral(e, phi));
-                assert!(energy_ratio(e, phi, mid) > 0.0);
-                assert!(energy_ratio(e, phi, neutral(e, phi) - 1.0) < 0.0);
-            }
-        }
-    }
 }

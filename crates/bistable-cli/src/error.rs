@@ -1,6 +1,7 @@
 //! Errors of the command-line program and their exit codes.
 
 use std::fmt;
+use std::num::NonZeroU32;
 use std::path::{Path, PathBuf};
 
 use bistable_core::{ParamError, SimError};
@@ -69,6 +70,14 @@ impl CliError {
                 format!("must be >= {min}"),
             ))
         }
+    }
+
+    /// The count given for `option` when it is at least `min` (>= 1), else the error naming
+    /// both.
+    pub fn count(option: &str, value: u32, min: u32) -> Result<NonZeroU32, Self> {
+        NonZeroU32::new(value)
+            .filter(|v| v.get() >= min)
+            .ok_or_else(|| Self::invalid_text(option, value, format!("must be >= {min}")))
     }
 
     /// An I/O error on `path`.

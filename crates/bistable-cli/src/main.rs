@@ -1,22 +1,23 @@
 //! `bistable`: command-line front end of the bistable impact oscillator.
 //!
+//! The numerics live in `bistable-core` (model, integrator) and `bistable-analysis` (sweeps,
+//! shooting, continuation, bifurcation data, energy maps, spectra); this crate holds argument
+//! handling, files, JSON, progress bars and plots.
+//!
 //! Layout (so that more subcommands can be added as their own modules):
 //! - `main.rs`: the clap top level, one enum variant per subcommand, error reporting and exit codes;
 //! - `common.rs`: the options every subcommand shares ([`common::CommonArgs`], flattened into each
-//!   subcommand's arguments) and the validated model built from them;
+//!   subcommand's arguments), the validated model and the thread count built from them;
 //! - `error.rs`: [`error::CliError`] and its exit codes;
 //! - `output.rs`: number formatting, CSV writers, JSON printing;
-//! - `progress.rs`: a progress bar on stderr for long runs;
-//! - `parallel.rs`: work spread over threads, results back in completion order;
+//! - `progress.rs`: progress bars on stderr for long runs;
 //! - `plot.rs`: PNG figures;
 //! - `ranges.rs`: `A:B:N` parameter ranges;
 //! - `simulate.rs`: `bistable simulate`;
 //! - `classify.rs`: `bistable classify` (and the classification record `map` writes);
 //! - `map.rs`: `bistable map`;
-//! - `attractor.rs`: per-cycle maxima, impact phases and section points of a steady state;
-//! - `branches.rs`: periodic-orbit branches along a parameter grid (shooting, continuation);
+//! - `branches.rs`: periodic-orbit branches as CSV rows and curves on a chart;
 //! - `bifurcation.rs`: `bistable bifurcation`;
-//! - `arclength.rs`: pseudo-arclength continuation of orbits in Ω (through folds);
 //! - `orbit.rs`: `bistable orbit`;
 //! - `thresholds.rs`: `bistable thresholds`;
 //! - `energy_map.rs`: `bistable energy-map`;
@@ -26,8 +27,6 @@
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
 //! Result<(), CliError>`, then add a variant to [`Command`] and a line to [`main`].
 
-mod arclength;
-mod attractor;
 mod bifurcation;
 mod branches;
 mod classify;
@@ -37,7 +36,6 @@ mod error;
 mod map;
 mod orbit;
 mod output;
-mod parallel;
 mod plot;
 mod progress;
 mod ranges;

@@ -10,16 +10,18 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
+use bistable_analysis::sweep::{classify_points, interleaved};
+use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
+use bistable_analysis::{Model, Threads};
 use bistable_core::ClassifyOptions;
 
 use crate::classify::{ClassifyArgs, Record, CSV_COLUMNS};
-use crate::common::{Model, ModelArgs};
+use crate::common::{threads, ModelArgs};
 use crate::error::CliError;
 use crate::output::{print_json, print_text, CsvFile};
-use crate::parallel;
 use crate::plot::{self, halo_segments, header, Area, DrawResult, Mark, FONT};
+use crate::progress::Progress;
 use crate::ranges::{Range, MAX_POINTS};
-use crate::thresholds::{quasi_static, Thresholds};
 
 /// Lyapunov periods of an aperiodic point in a map unless `--lyapunov-periods` says otherwise.
 const MAP_LYAPUNOV_PERIODS: u32 = 300;
@@ -158,9 +160,9 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
             format!("the grid has more than {MAX_POINTS} points"),
         ));
     }
-    let model = Model::new(&args.model, omegas.start, vs.start)?;
+    let model = args.model.model(omegas.start, vs.start)?;
     let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;
-    let threads = parallel::threads(args.threads, "--threads")?;
+    let threads = threads(args.threads, "--threads")?;
 
     let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
     let mut done: HashMap<Key, Record> = HashMap::new();
@@ -206,7 +208,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         computed,
         resumed,
         failed: failed.len(),
-        threads,
+        threads: threads.get(),
         wall_time_s: wall,
         points_per_second: if wall > 0.0 {
             computed as f64 / wall
@@ -273,24 +275,6 @@ impl Drop for OutLock {
     fn drop(&mut self) {
         let _ = std::fs::remove_file(&self.0);
     }
-}
-
-/// The indices `0..n` in an order that spreads over the whole range early (a stride coprime
-/// with `n` near `n/φ`), so partial results and the ETA are representative.
-fn interleaved(n: usize) -> impl Iterator<Item = usize> {
-    let mut stride = ((n as f64) * 0.618_033_988_749_894_9) as usize;
-    stride = stride.max(1);
-    while gcd(stride, n) != 1 {
-        stride += 1;
-    }
-    (0..n).map(move |k| ((k as u128 * stride as u128) % n as u128) as usize)
-}
-
-fn gcd(mut a: usize, mut b: usize) -> usize {
-    while b != 0 {
-        (a, b) = (b, a % b);
-    }
-    a
 }
 
 /// The rows already in `path` (none if it does not exist). Drops an incomplete last line (an
@@ -361,13 +345,14 @@ fn read_existing(path: &Path, model: &Model) -> Result<Vec<Record>, CliError> {
     Ok(records)
 }
 
-/// Classifies `todo` on `threads` workers; each finished record goes to `out` (flushed at once)
-/// and to `sink`. Returns the number computed and the points that failed (reported on stderr).
+/// Classifies `todo` on `threads` workers with a progress bar; each finished record goes to
+/// `out` (flushed at once) and to `sink`. Returns the number computed and the points that
+/// failed (reported on stderr).
 fn compute(
     todo: &[(f64, f64)],
     model: &Model,
     co: ClassifyOptions,
-    threads: usize,
+    threads: Threads,
     out: Option<&Path>,
     mut sink: impl FnMut(Record),
 ) -> Result<(usize, Vec<(f64, f64)>), CliError> {
@@ -381,26 +366,27 @@ fn compute(
     }
     let mut failed = Vec::new();
     let mut computed = 0usize;
-    parallel::run(
-        todo,
-        threads,
-        &format!("classifying {} points", todo.len()),
-        |&(w, v)| model.at(w, v).and_then(|m| Record::classify(&m, co)),
-        |i, r| {
-            match r {
-                Ok(rec) => {
-                    if let Some(c) = csv.as_mut() {
-                        c.row(&rec.fields())?;
-                        c.flush()?;
-                    }
-                    computed += 1;
-                    sink(rec);
+    let mut progress = Progress::new(
+        todo.len() as f64,
+        format!("classifying {} points", todo.len()),
+    );
+    classify_points(model, todo, co, threads, |i, r| {
+        match r {
+            Ok(point) => {
+                let rec = Record::new(&point);
+                if let Some(c) = csv.as_mut() {
+                    c.row(&rec.fields())?;
+                    c.flush()?;
                 }
-                Err(e) => failed.push((todo[i], e)),
+                computed += 1;
+                sink(rec);
             }
-            Ok(())
-        },
-    )?;
+            Err(e) => failed.push((todo[i], CliError::from(e))),
+        }
+        progress.set((computed + failed.len()) as f64);
+        Ok::<(), CliError>(())
+    })?;
+    progress.finish();
     for ((w, v), e) in &failed {
         eprintln!("warning: Ω = {w}, V = {v}: {e}");
     }
@@ -551,8 +537,7 @@ fn draw_map(
     co: ClassifyOptions,
 ) -> DrawResult {
     let e = model.restitution();
-    let t = Thresholds::new(e, None);
-    let (v_single, v_inter) = (t.single_impact, t.interwell);
+    let (v_single, v_inter) = (single_impact(e), interwell(e));
     let legend = [
         (
             Mark::Halo(LINE_SINGLE, None),
@@ -739,21 +724,4 @@ fn legend_panel(area: &Area<'_>, present: &HashMap<Category, usize>, n: usize) -
         y += 50;
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn interleaved_order_is_a_permutation() {
-        for n in [1, 2, 7, 60, 2400, 60_000] {
-            let mut seen = vec![false; n];
-            for i in interleaved(n) {
-                assert!(!seen[i], "n = {n}: {i} twice");
-                seen[i] = true;
-            }
-            assert!(seen.iter().all(|&s| s));
-        }
-    }
 }

@@ -7,16 +7,20 @@ use clap::Args;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_core::{shoot, Event, ShootOptions};
+use bistable_analysis::arclength::folds;
+use bistable_analysis::continuation::{continue_orbits, Curves, Method};
+use bistable_analysis::cycles::settled;
+use bistable_analysis::orbit::{
+    abs_multiplier, analyse, det_monodromy, det_relative_error, floquet_exponent, shoot,
+};
+use bistable_analysis::Model;
 
-use crate::arclength::{self, ArcOptions, ArcPoint};
-use crate::attractor::{detect_period, steady_cycles};
-use crate::branches::{self, Branches, Seed};
-use crate::common::{Model, ModelArgs};
+use crate::branches;
+use crate::common::{threads, ModelArgs};
 use crate::error::CliError;
 use crate::output::{print_json, print_text, CsvFile, Field};
-use crate::parallel;
 use crate::plot::{self, header, Area, DrawResult, Mark};
+use crate::progress::StageBars;
 use crate::ranges::{Pair, Range};
 
 /// Long description shown by `bistable orbit --help`.
@@ -219,16 +223,11 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
             "takes one value without --continue-omega",
         ));
     };
-    let model = Model::new(&args.model, omega, velocity)?;
+    let model = args.model.model(omega, velocity)?;
     let (guess, source) = match args.guess {
         Some(Pair(x, v)) => ((x, v), "--guess".to_string()),
         None => {
-            let mut sim = model.simulator()?;
-            sim.advance_instant(
-                model.shaker.section(u64::from(args.settle)),
-                &mut |_: &Event| {},
-            )?;
-            let st = sim.state();
+            let st = settled(&model, args.settle)?.state();
             (
                 (st.x, st.v),
                 format!(
@@ -238,27 +237,15 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
             )
         }
     };
-    let orbit = shoot(
-        model.params,
-        model.shaker,
-        model.opts,
-        args.period,
-        guess,
-        ShootOptions::default(),
-    )
-    .map_err(|e| {
+    let orbit = shoot(&model, args.period, guess).map_err(|e| {
         CliError::Failed(format!(
             "no {}-periodic orbit found from ({}, {}): {e}",
             args.period, guess.0, guess.1
         ))
     })?;
-    let cycle_max = branches::analyse(&model, orbit)?
+    let cycle_max = analyse(&model, orbit)?
         .map(|o| o.cycle_max)
         .unwrap_or_default();
-    let m = orbit.monodromy;
-    let det = m[0][0] * m[1][1] - m[0][1] * m[1][0];
-    let abs = |(re, im): (f64, f64)| re.hypot(im);
-    let max_abs = abs(orbit.multipliers[0]);
     let report = OrbitReport {
         omega,
         velocity,
@@ -271,12 +258,12 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
             .map(|&(re, im)| Multiplier {
                 re,
                 im,
-                abs: abs((re, im)),
+                abs: re.hypot(im),
             })
             .collect(),
-        max_abs_multiplier: max_abs,
+        max_abs_multiplier: abs_multiplier(&orbit),
         stable: orbit.stable,
-        floquet_exponent: max_abs.ln() / (f64::from(orbit.periods) * model.shaker_period()),
+        floquet_exponent: floquet_exponent(&orbit, model.shaker_period()),
         impacts: orbit.impacts,
         sticks: orbit.sticks,
         snap_throughs: orbit.snap_throughs,
@@ -284,11 +271,10 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
         cycle_max,
         iterations: orbit.iterations,
         residual: orbit.residual,
-        monodromy: m,
-        det_monodromy: det,
+        monodromy: orbit.monodromy,
+        det_monodromy: det_monodromy(&orbit),
         det_identity: orbit.det_identity,
-        det_relative_error: (!orbit.sticks)
-            .then(|| ((det - orbit.det_identity) / orbit.det_identity).abs()),
+        det_relative_error: det_relative_error(&orbit),
         guess,
         guess_source: source,
         distance_to_guess: (orbit.x0 - guess.0).hypot(orbit.v0 - guess.1),
@@ -371,49 +357,30 @@ struct ContinuationSummary {
     files: Vec<PathBuf>,
 }
 
-/// The continued orbits for one V.
-enum Curves {
-    /// Natural continuation on the grid.
-    Natural(Branches),
-    /// Pseudo-arclength traces.
-    Arc(Vec<Vec<ArcPoint>>),
-}
-
 /// Header of the CSV of `--arclength` traces.
 const ARC_HEADER: &str = "velocity,trace,index,omega,x0,v0,max_x,stable,multiplier_1_re,\
 multiplier_1_im,multiplier_2_re,multiplier_2_im,abs_multiplier,impacts";
 
 fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
     let range = range.check("--continue-omega", |w| w > 0.0, "Ω must be > 0")?;
-    let threads = parallel::threads(args.threads, "--threads")?;
+    let threads = threads(args.threads, "--threads")?;
     let omegas = range.values();
     let p = args.period;
+    let method = if args.arclength {
+        Method::Arclength
+    } else {
+        Method::Natural
+    };
     let mut all: Vec<(f64, Curves)> = Vec::new();
     for &v in &args.velocity {
         let models = omegas
             .iter()
-            .map(|&w| Model::new(&args.model, w, v))
+            .map(|&w| args.model.model(w, v))
             .collect::<Result<Vec<_>, _>>()?;
-        let record = 4 * p.max(16) + 8;
-        let mut seeds: Vec<Seed> = Vec::new();
-        parallel::run(
-            &models,
-            threads,
-            &format!("simulating {} points at V = {v}", models.len()),
-            |m| steady_cycles(m, args.settle, record, 16),
-            |i, c| {
-                let c = c?;
-                let period = detect_period(&c.sections, 16, 1e-7);
-                seeds.extend(branches::seeds_from(i, &c.sections, period, &[p]));
-                Ok(())
-            },
-        )?;
-        let curves = if args.arclength {
-            Curves::Arc(arc_traces(&models, &seeds, range, p, threads)?)
-        } else {
-            let mut b = branches::build(&models, &[p], &seeds, threads)?;
-            Curves::Natural(b.remove(0))
-        };
+        let mut bars = StageBars::new(format!(" at V = {v}"));
+        let curves = continue_orbits(&models, p, args.settle, method, threads, &mut |r| {
+            bars.report(r)
+        })?;
         all.push((v, curves));
     }
     let mut files = Vec::new();
@@ -421,7 +388,7 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
         files.push(write_continuation_csv(path, &all)?);
     }
     if let Some(path) = &args.plot {
-        let model = Model::new(&args.model, range.start, args.velocity[0])?;
+        let model = args.model.model(range.start, args.velocity[0])?;
         plot::png(path, (1400, 950), |root| {
             draw(root, &model, p, args.arclength, &omegas, &all)
         })?;
@@ -468,60 +435,6 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
     print_text(&text)
 }
 
-/// Pseudo-arclength traces through every seeded orbit not already on a trace, in both
-/// directions, joined into one polyline each.
-fn arc_traces(
-    models: &[Model],
-    seeds: &[Seed],
-    range: Range,
-    p: u32,
-    threads: usize,
-) -> Result<Vec<Vec<ArcPoint>>, CliError> {
-    let mut found = branches::solve_seeds(models, seeds, threads)?;
-    found.sort_by_key(|f| f.0.point);
-    let (lo, hi) = range.bounds();
-    let step = if range.n > 1 {
-        range.step().abs()
-    } else {
-        0.01
-    };
-    let o = ArcOptions {
-        period: p,
-        omega_bounds: (lo - 0.5 * step, hi + 0.5 * step),
-        ds_max: step,
-        max_points: 40 * range.n.max(50),
-    };
-    let mut traces: Vec<Vec<ArcPoint>> = Vec::new();
-    for (seed, orbit) in &found {
-        let w = models[seed.point].omega();
-        let (x, v) = orbit.point();
-        if traces.iter().any(|t| arclength::covers(t, w, x, v, 5e-3)) {
-            continue;
-        }
-        let model = &models[seed.point];
-        let start = (w, x, v);
-        let (mut back, fwd) = std::thread::scope(|s| {
-            let b = s.spawn(|| arclength::trace(model, start, -1.0, o));
-            let f = arclength::trace(model, start, 1.0, o);
-            (b.join().expect("trace thread"), f)
-        });
-        let mut back = std::mem::take(back.as_mut().map_err(|e| CliError::Failed(e.to_string()))?);
-        back.reverse();
-        back.extend(fwd?.into_iter().skip(1));
-        if back.len() > 1 {
-            traces.push(back);
-        }
-    }
-    Ok(traces)
-}
-
-/// Number of turning points of Ω along a trace.
-fn folds(t: &[ArcPoint]) -> usize {
-    t.windows(3)
-        .filter(|w| (w[1].omega - w[0].omega) * (w[2].omega - w[1].omega) < 0.0)
-        .count()
-}
-
 fn branch_summary(v: f64, c: &Curves, omegas: &[f64]) -> BranchSummary {
     match c {
         Curves::Natural(b) => {
@@ -535,14 +448,14 @@ fn branch_summary(v: f64, c: &Curves, omegas: &[f64]) -> BranchSummary {
             BranchSummary {
                 velocity: v,
                 orbits: b.len(),
-                stable: b.slots.iter().flatten().filter(|o| o.orbit.stable).count(),
+                stable: b.stable(),
                 omega_min: covered.first().copied(),
                 omega_max: covered.last().copied(),
                 traces: None,
                 folds: None,
             }
         }
-        Curves::Arc(traces) => {
+        Curves::Arclength(traces) => {
             let pts = || traces.iter().flatten();
             BranchSummary {
                 velocity: v,
@@ -561,7 +474,7 @@ fn write_continuation_csv(
     path: &std::path::Path,
     all: &[(f64, Curves)],
 ) -> Result<PathBuf, CliError> {
-    let arc = all.iter().any(|(_, c)| matches!(c, Curves::Arc(_)));
+    let arc = all.iter().any(|(_, c)| matches!(c, Curves::Arclength(_)));
     let mut csv = CsvFile::create(
         path,
         if arc {
@@ -573,7 +486,7 @@ fn write_continuation_csv(
     for (v, c) in all {
         match c {
             Curves::Natural(b) => branches::write_csv(&mut csv, std::slice::from_ref(b))?,
-            Curves::Arc(traces) => {
+            Curves::Arclength(traces) => {
                 for (k, t) in traces.iter().enumerate() {
                     for (i, a) in t.iter().enumerate() {
                         let m = a.multipliers;
@@ -654,7 +567,7 @@ fn draw(
                 .flatten()
                 .flat_map(|o| o.cycle_max.iter().copied())
                 .collect(),
-            Curves::Arc(t) => t
+            Curves::Arclength(t) => t
                 .iter()
                 .flatten()
                 .filter(|p| p.omega >= x0 && p.omega <= x1)
@@ -678,7 +591,7 @@ fn draw(
         let colour = SERIES[k % SERIES.len()];
         match c {
             Curves::Natural(b) => branches::draw(&mut chart, b, omegas, colour)?,
-            Curves::Arc(traces) => {
+            Curves::Arclength(traces) => {
                 for t in traces {
                     let pts: Vec<(f64, f64, bool)> =
                         t.iter().map(|p| (p.omega, p.max_x, p.stable)).collect();

@@ -12,9 +12,9 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 
+use bistable_analysis::Model;
 use bistable_core::State;
 
-use crate::common::Model;
 use crate::error::CliError;
 
 const TAU: f64 = std::f64::consts::TAU;
@@ -497,6 +497,17 @@ pub(crate) fn vline(chart: &mut Chart<'_, '_>, x: f64, color: RGBColor) -> DrawR
     Ok(())
 }
 
+/// Short description of a model for titles: `Ω = 1.75, V = 0.07, ζ = 0.02, e = 0.85`.
+pub(crate) fn label(m: &Model) -> String {
+    format!(
+        "Ω = {}, V = {}, ζ = {}, e = {}",
+        m.omega(),
+        m.velocity(),
+        m.params.zeta(),
+        m.restitution()
+    )
+}
+
 /// `1 impact`, `2 impacts`.
 pub(crate) fn plural(n: u64, what: &str) -> String {
     if n == 1 {
@@ -560,7 +571,7 @@ fn waveform(root: &Area<'_>, data: &PlotData) -> DrawResult {
     }
     let area = header(
         root,
-        &format!("Waveform — {}", data.model.label()),
+        &format!("Waveform — {}", label(&data.model)),
         &format!(
             "{}; {} in view, {} in the run",
             window_note(data),
@@ -698,7 +709,7 @@ fn phase_portrait(root: &Area<'_>, data: &PlotData) -> DrawResult {
     }
     let area = header(
         root,
-        &format!("Phase portrait — {}", data.model.label()),
+        &format!("Phase portrait — {}", label(&data.model)),
         &format!(
             "{}; Poincaré section: the state at τ = k·2π/Ω",
             window_note(data)
@@ -815,7 +826,7 @@ fn energy_per_impact(root: &Area<'_>, data: &PlotData) -> DrawResult {
     ));
     let area = header(
         root,
-        &format!("Energy per impact — {}", data.model.label()),
+        &format!("Energy per impact — {}", label(&data.model)),
         &subtitle,
         &legend,
     )?;

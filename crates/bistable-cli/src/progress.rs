@@ -1,10 +1,13 @@
-//! A progress bar on stderr for long runs: shown only when stderr is a terminal and the run has
+//! Progress bars on stderr for long runs: shown only when stderr is a terminal and the run has
 //! already taken a while, so short runs, pipes and tests print nothing.
 
 use std::io::IsTerminal;
 use std::time::{Duration, Instant};
 
+use bistable_analysis::{self as analysis, Stage};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+use crate::error::CliError;
 
 /// Resolution of the bar.
 const TICKS: u64 = 1000;
@@ -70,5 +73,41 @@ impl Progress {
 impl Drop for Progress {
     fn drop(&mut self) {
         self.finish();
+    }
+}
+
+/// Progress bars for the stages of a library analysis: one bar per stage, removed when the
+/// stage completes.
+pub struct StageBars {
+    context: String,
+    current: Option<(Stage, Progress)>,
+}
+
+impl StageBars {
+    /// Bars whose simulation stage is labelled `simulating N points{context}`.
+    pub fn new(context: impl Into<String>) -> Self {
+        Self {
+            context: context.into(),
+            current: None,
+        }
+    }
+
+    /// Shows a report of the analysis (never cancels it).
+    pub fn report(&mut self, p: analysis::Progress) -> Result<(), CliError> {
+        if self.current.as_ref().is_none_or(|(s, _)| *s != p.stage) {
+            let label = match p.stage {
+                Stage::Simulating => format!("simulating {} points{}", p.total, self.context),
+                Stage::Shooting => format!("shooting from {} seeds", p.total),
+                Stage::Continuing => "continuing the orbits".to_string(),
+            };
+            self.current = Some((p.stage, Progress::new(p.total as f64, label)));
+        }
+        if let Some((_, bar)) = &mut self.current {
+            bar.set(p.done as f64);
+            if p.done >= p.total {
+                self.current = None;
+            }
+        }
+        Ok(())
     }
 }

@@ -9,9 +9,11 @@ use std::time::Instant as WallClock;
 use clap::{ArgGroup, Args};
 use serde::Serialize;
 
+use bistable_analysis::schedule::{earliest, Schedule};
+use bistable_analysis::Model;
 use bistable_core::{ContactMode, Event, Impact, Observer, State};
 
-use crate::common::{positive, Chatter, CommonArgs, Model};
+use crate::common::{positive, Chatter, CommonArgs};
 use crate::error::CliError;
 use crate::output::{num, print_json, print_text, sibling, CsvFile, Field};
 use crate::plot::{self, PlotData, Sample};
@@ -169,63 +171,6 @@ pub struct SimulateArgs {
         help_heading = "Output"
     )]
     pub plot_max_points: u64,
-}
-
-/// Times `k·step` for `k = next, next+1, …, last`, all `≤` the end of the run.
-struct Schedule {
-    step: f64,
-    next: u64,
-    last: u64,
-    active: bool,
-}
-
-impl Schedule {
-    /// Multiples of `step` in `[from, t_end]`.
-    fn new(step: f64, from: f64, t_end: f64) -> Self {
-        let mut last = (t_end / step).floor().max(0.0) as u64;
-        while last > 0 && last as f64 * step > t_end {
-            last -= 1;
-        }
-        while ((last + 1) as f64 * step) <= t_end {
-            last += 1;
-        }
-        let mut next = (from / step).ceil().max(0.0) as u64;
-        while next > 0 && ((next - 1) as f64 * step) >= from {
-            next -= 1;
-        }
-        while (next as f64 * step) < from {
-            next += 1;
-        }
-        Self {
-            step,
-            next,
-            last,
-            active: true,
-        }
-    }
-
-    fn none() -> Self {
-        Self {
-            step: 1.0,
-            next: 1,
-            last: 0,
-            active: false,
-        }
-    }
-
-    fn peek(&self) -> Option<f64> {
-        (self.active && self.next <= self.last).then_some(self.next as f64 * self.step)
-    }
-
-    /// Whether the next time is `t`; if so, moves past it.
-    fn take(&mut self, t: f64) -> bool {
-        if self.peek() == Some(t) {
-            self.next += 1;
-            true
-        } else {
-            false
-        }
-    }
 }
 
 /// What the plots need from the event stream.
@@ -426,7 +371,7 @@ struct Plan {
 
 impl Plan {
     fn new(args: &SimulateArgs) -> Result<Self, CliError> {
-        let model = Model::from_args(&args.common)?;
+        let model = args.common.model()?;
         let t_end = match (args.t_end, args.periods) {
             (Some(t), _) => positive("--t-end", t)?,
             (None, Some(n)) => positive("--periods", n)? * TAU,
@@ -554,19 +499,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let mut poincare: Vec<(f64, f64)> = Vec::new();
     let mut progress = Progress::new(t_end, "simulating");
 
-    loop {
-        let next = [
-            trace_times.peek(),
-            plot_times.peek(),
-            poincare_times.peek(),
-            chunks.peek(),
-        ]
-        .into_iter()
-        .flatten()
-        .fold(f64::INFINITY, f64::min);
-        if !next.is_finite() {
-            break;
-        }
+    while let Some(next) = earliest(&[&trace_times, &plot_times, &poincare_times, &chunks]) {
         let reached = sim.advance(next, &mut rec);
         rec.check()?;
         reached?;
@@ -642,7 +575,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         zeta: model.params.zeta(),
         restitution: model.restitution(),
         tol: model.opts.tol(),
-        chatter: model.chatter,
+        chatter: args.common.model.chatter,
         t_end,
         natural_periods: t_end / TAU,
         shaker_periods: t_end / model.shaker_period(),
@@ -794,24 +727,4 @@ fn human(s: &Summary) -> String {
         }
     }
     o
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn schedule_covers_multiples_up_to_the_end() {
-        let s = Schedule::new(0.1, 0.0, 1.0);
-        assert_eq!((s.next, s.last), (0, 10));
-        let s = Schedule::new(0.1, 0.25, 0.95);
-        assert_eq!((s.next, s.last), (3, 9));
-        let s = Schedule::new(0.3, 0.0, 0.9);
-        // 3 * 0.3 = 0.8999999999999999 <= 0.9.
-        assert_eq!(s.last, 3);
-        let mut s = Schedule::new(0.5, 0.0, 1.0);
-        assert!(s.take(0.0) && s.take(0.5) && s.take(1.0));
-        assert_eq!(s.peek(), None);
-        assert_eq!(Schedule::none().peek(), None);
-    }
 }

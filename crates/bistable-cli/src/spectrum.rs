@@ -5,14 +5,12 @@ use std::path::PathBuf;
 
 use clap::Args;
 use plotters::prelude::*;
-use rustfft::num_complex::Complex;
-use rustfft::FftPlanner;
 use serde::Serialize;
 
-use bistable_core::Event;
+use bistable_analysis::spectrum::{flatness, Spectrum, SpectrumOptions};
+use bistable_analysis::Model;
 
-use crate::attractor::detect_period;
-use crate::common::{CommonArgs, Model};
+use crate::common::CommonArgs;
 use crate::error::CliError;
 use crate::output::{print_json, print_text, CsvFile, Field};
 use crate::plot::{self, header, Area, DrawResult, Mark};
@@ -90,47 +88,11 @@ struct Summary {
     files: Vec<PathBuf>,
 }
 
-/// The spectrum: `(frequency / Ω, amplitude)` for bins `0..=N/2`.
-pub fn amplitude_spectrum(x: &[f64], record: u32) -> Vec<(f64, f64)> {
-    let n = x.len();
-    let mean = x.iter().sum::<f64>() / n as f64;
-    let w: Vec<f64> = (0..n)
-        .map(|k| 0.5 - 0.5 * (std::f64::consts::TAU * k as f64 / n as f64).cos())
-        .collect();
-    let wsum: f64 = w.iter().sum();
-    let mut buf: Vec<Complex<f64>> = x
-        .iter()
-        .zip(&w)
-        .map(|(&v, &wk)| Complex::new((v - mean) * wk, 0.0))
-        .collect();
-    FftPlanner::new().plan_fft_forward(n).process(&mut buf);
-    buf[..=n / 2]
-        .iter()
-        .enumerate()
-        .map(|(k, c)| (k as f64 / f64::from(record), 2.0 * c.norm() / wsum))
-        .collect()
-}
-
-/// Geometric over arithmetic mean of the power of the bins with `0 < f <= max_f`.
-pub fn flatness(spec: &[(f64, f64)], max_f: f64) -> f64 {
-    let power: Vec<f64> = spec
-        .iter()
-        .filter(|s| s.0 > 0.0 && s.0 <= max_f)
-        .map(|s| (s.1 * s.1).max(1e-300))
-        .collect();
-    if power.is_empty() {
-        return 0.0;
-    }
-    let n = power.len() as f64;
-    let geo = (power.iter().map(|p| p.ln()).sum::<f64>() / n).exp();
-    geo / (power.iter().sum::<f64>() / n)
-}
-
 /// Runs `bistable spectrum`.
 pub fn run(args: &SpectrumArgs) -> Result<(), CliError> {
-    let model = Model::from_args(&args.common)?;
-    CliError::at_least("--record", args.record, 8)?;
-    CliError::at_least("--samples", args.samples, 4)?;
+    let model = args.common.model()?;
+    let record = CliError::count("--record", args.record, 8)?;
+    let samples = CliError::count("--samples", args.samples, 4)?;
     if u64::from(args.record) * u64::from(args.samples) > 1 << 26 {
         return Err(CliError::invalid_text(
             "--record",
@@ -148,34 +110,18 @@ pub fn run(args: &SpectrumArgs) -> Result<(), CliError> {
     }
     let max_f = args.max_freq.min(nyquist);
 
-    let plate = model.shaker;
-    let mut sim = model.simulator()?;
-    let first = u64::from(args.transient);
-    sim.advance_instant(plate.section(first), &mut |_: &Event| {})?;
-    let h = plate.period() / f64::from(args.samples);
-    let mut x = Vec::with_capacity((args.record * args.samples) as usize);
-    let mut sections = Vec::with_capacity(args.record as usize + 1);
-    let st = sim.state();
-    sections.push((st.x, st.v));
-    for c in 0..u64::from(args.record) {
-        let start = plate.section(first + c);
-        for j in 0..args.samples {
-            if j > 0 {
-                sim.advance_instant(start + f64::from(j) * h, &mut |_: &Event| {})?;
-            }
-            x.push(sim.state().x);
-        }
-        sim.advance_instant(plate.section(first + c + 1), &mut |_: &Event| {})?;
-        let st = sim.state();
-        sections.push((st.x, st.v));
-    }
-    let spec = amplitude_spectrum(&x, args.record);
-    let peak = spec
-        .iter()
-        .skip(1)
-        .copied()
-        .fold((0.0, 0.0), |a, b| if b.1 > a.1 { b } else { a });
-    let period = detect_period(&sections, 16, 1e-7);
+    let Spectrum {
+        bins: spec,
+        period,
+        peak,
+    } = Spectrum::compute(
+        &model,
+        SpectrumOptions {
+            transient: args.transient,
+            record,
+            samples,
+        },
+    )?;
     let flat = flatness(&spec, max_f);
 
     let mut files = Vec::new();
@@ -252,7 +198,7 @@ fn draw(
     };
     let area = header(
         root,
-        &format!("Amplitude spectrum of x(τ) — {}", model.label()),
+        &format!("Amplitude spectrum of x(τ) — {}", plot::label(model)),
         &format!(
             "{response}; {} shaker periods after {} of transient, {} samples per period, Hann \
              window; spectral flatness {flat:.2e}",
@@ -280,41 +226,4 @@ fn draw(
     let clipped: Vec<(f64, f64)> = pts.iter().map(|&(f, a)| (f, a.max(floor - 0.3))).collect();
     plot::thick_line(&mut chart, &clipped, LINE, 1)?;
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn a_sinusoid_has_one_line_of_its_amplitude() {
-        // 0.3·sin at 2Ω plus 0.1·cos at 0.5Ω, 64 samples per shaker period, 256 periods.
-        let (rec, spp) = (256u32, 64u32);
-        let x: Vec<f64> = (0..rec * spp)
-            .map(|k| {
-                let t = f64::from(k) / f64::from(spp); // in shaker periods
-                0.3 * (std::f64::consts::TAU * 2.0 * t).sin()
-                    + 0.1 * (std::f64::consts::TAU * 0.5 * t).cos()
-                    + 7.0
-            })
-            .collect();
-        let s = amplitude_spectrum(&x, rec);
-        let at = |f: f64| s[(f * f64::from(rec)).round() as usize];
-        assert!((at(2.0).1 - 0.3).abs() < 1e-9, "{:?}", at(2.0));
-        assert!((at(0.5).1 - 0.1).abs() < 1e-9);
-        assert!(s[0].1 < 1e-9, "mean removed");
-        assert!(at(3.0).1 < 1e-12);
-        // A line spectrum is far from flat; white-ish noise is not.
-        assert!(flatness(&s, 5.0) < 1e-6);
-        let mut seed = 12345u64;
-        let noise: Vec<f64> = (0..4096)
-            .map(|_| {
-                seed = seed
-                    .wrapping_mul(6364136223846793005)
-                    .wrapping_add(1442695040888963407);
-                (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-            })
-            .collect();
-        assert!(flatness(&amplitude_spectrum(&noise, 64), 5.0) > 0.1);
-    }
 }

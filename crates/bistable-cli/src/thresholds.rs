@@ -3,6 +3,8 @@
 use clap::Args;
 use serde::Serialize;
 
+use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
+
 use crate::error::CliError;
 use crate::output::{print_json, print_text};
 
@@ -43,37 +45,32 @@ pub struct ThresholdsArgs {
     pub json: bool,
 }
 
-/// The thresholds for one `e`.
+/// The thresholds for one `e`, as printed.
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
-pub struct Thresholds {
+struct Thresholds {
     /// `e`.
-    pub restitution: f64,
+    restitution: f64,
     /// `V = 1/(4(1+e))` (Eq. 16).
-    pub single_impact: f64,
+    single_impact: f64,
     /// `V = (1−e)/(2(1+e))` (Eq. 17).
-    pub interwell: f64,
+    interwell: f64,
     /// `Ω` if given.
-    pub omega: Option<f64>,
+    omega: Option<f64>,
     /// `V = Ω/2` (Eq. 18) at `omega`.
-    pub quasi_static: Option<f64>,
+    quasi_static: Option<f64>,
 }
 
 impl Thresholds {
     /// The thresholds for restitution `e` (and the quasi-static one at `omega`).
-    pub fn new(e: f64, omega: Option<f64>) -> Self {
+    fn new(e: f64, omega: Option<f64>) -> Self {
         Self {
             restitution: e,
-            single_impact: 1.0 / (4.0 * (1.0 + e)),
-            interwell: (1.0 - e) / (2.0 * (1.0 + e)),
+            single_impact: single_impact(e),
+            interwell: interwell(e),
             omega,
             quasi_static: omega.map(quasi_static),
         }
     }
-}
-
-/// The quasi-static threshold `V = Ω/2` (Eq. 18).
-pub fn quasi_static(omega: f64) -> f64 {
-    0.5 * omega
 }
 
 /// Runs `bistable thresholds`.
@@ -109,20 +106,4 @@ pub fn run(args: &ThresholdsArgs) -> Result<(), CliError> {
         ),
     }
     print_text(&text)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn paper_values() {
-        let t = Thresholds::new(0.85, Some(0.3));
-        assert!((t.single_impact - 1.0 / 7.4).abs() < 1e-15);
-        assert!((t.interwell - 0.15 / 3.7).abs() < 1e-15);
-        assert_eq!(t.quasi_static, Some(0.15));
-        // The single-impact threshold is where ½((1+e)V)² equals the barrier energy 1/32.
-        let w = (1.0 + 0.7) * Thresholds::new(0.7, None).single_impact;
-        assert!((0.5 * w * w - bistable_core::potential::BARRIER_ENERGY).abs() < 1e-15);
-    }
 }

@@ -8,21 +8,29 @@
 //! central difference (the map runs from plate phase 0 to plate phase 0, so changing Ω also
 //! changes its duration `2πp/Ω`).
 
+use std::num::NonZeroU32;
+
 use bistable_core::shooting::eigenvalues;
 use bistable_core::{Event, SimError, Simulator, Sinusoid};
 
-use crate::attractor::record_cycles;
-use crate::common::Model;
-use crate::error::CliError;
+use crate::cycles::record_cycles;
+use crate::orbit::Orbit;
+use crate::seeds::Seed;
+use crate::Model;
+
+/// Samples per shaker period for the largest displacement of a traced orbit.
+const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
+/// A seeded orbit within this distance (max norm in `x`, `x'`) of a trace is already on it.
+const COVERED: f64 = 5e-3;
 
 /// One orbit on a traced branch.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArcPoint {
     /// `Ω`.
     pub omega: f64,
-    /// Fixed point at plate phase 0.
+    /// Fixed point `x` at plate phase 0 (units of `Δx`).
     pub x0: f64,
-    /// Its velocity.
+    /// Its velocity `x'` (units of `ω0·Δx`).
     pub v0: f64,
     /// Floquet multipliers `(re, im)`, largest modulus first.
     pub multipliers: [(f64, f64); 2],
@@ -30,21 +38,43 @@ pub struct ArcPoint {
     pub stable: bool,
     /// Impacts per orbit.
     pub impacts: u64,
-    /// Largest displacement on the orbit.
+    /// Largest displacement on the orbit (units of `Δx`).
     pub max_x: f64,
 }
 
 /// Settings of a trace.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, PartialEq)]
 pub struct ArcOptions {
     /// Period in shaker periods.
     pub period: u32,
-    /// Stop once Ω leaves this interval.
+    /// Stop once Ω leaves this interval `(lo, hi)`.
     pub omega_bounds: (f64, f64),
-    /// Largest step along the branch (in the `(x, x', Ω)` norm).
+    /// Largest step along the branch (Euclidean norm in `(x, x', Ω)`), > 0.
     pub ds_max: f64,
     /// Most points on one trace.
     pub max_points: usize,
+}
+
+impl ArcOptions {
+    /// Options for tracing `period`-periodic orbits over the evenly spaced grid `omegas` (first
+    /// to last, non-empty): Ω may leave the grid by half a spacing, the step along the branch
+    /// is at most one spacing (0.01 for a single Ω), at most `40·max(n, 50)` points.
+    pub fn for_grid(period: u32, omegas: &[f64]) -> Self {
+        let n = omegas.len();
+        let (first, last) = (omegas[0], omegas[n - 1]);
+        let (lo, hi) = (first.min(last), first.max(last));
+        let step = if n > 1 {
+            ((last - first) / (n - 1) as f64).abs()
+        } else {
+            0.01
+        };
+        Self {
+            period,
+            omega_bounds: (lo - 0.5 * step, hi + 0.5 * step),
+            ds_max: step,
+            max_points: 40 * n.max(50),
+        }
+    }
 }
 
 /// Residual, Jacobian `[M − I | ∂P/∂Ω]`, monodromy and impacts at `u`.
@@ -167,7 +197,7 @@ fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
 }
 
 /// Newton on the augmented system from `pred`, with the arclength condition along `t`.
-/// Returns the converged point and its evaluation.
+/// Returns the converged point, its evaluation and the iterations used.
 fn correct(model: &Model, p: u32, pred: [f64; 3], t: [f64; 3]) -> Option<([f64; 3], Eval, u32)> {
     let mut u = pred;
     for it in 0..12 {
@@ -187,18 +217,11 @@ fn correct(model: &Model, p: u32, pred: [f64; 3], t: [f64; 3]) -> Option<([f64; 
     None
 }
 
-fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, CliError> {
+fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimError> {
     let multipliers = eigenvalues(e.m);
     let here = model.at(u[2], model.velocity())?;
-    let mut sim = Simulator::with_state(
-        here.params,
-        here.shaker.into(),
-        here.opts,
-        0.0,
-        u[0].max(0.0),
-        u[1],
-    )?;
-    let c = record_cycles(&mut sim, here.shaker, 0, p, 128)?;
+    let mut sim = here.simulator_from(u[0].max(0.0), u[1])?;
+    let c = record_cycles(&mut sim, here.shaker, 0, p, SAMPLES)?;
     Ok(ArcPoint {
         omega: u[2],
         x0: u[0],
@@ -210,15 +233,16 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, CliEr
     })
 }
 
-/// Traces the branch through the orbit `(x0, v0)` at `Ω0` (a fixed point of the map) in the
-/// direction of increasing (`dir > 0`) or decreasing Ω, until Ω leaves the bounds, the step
-/// size collapses (a non-smooth point such as grazing, or a lost orbit) or `max_points`.
+/// Traces the branch through the orbit `(x0, v0)` at `Ω0` (`start = (Ω0, x0, v0)`, a fixed
+/// point of the map at `model`'s V) in the direction of increasing (`dir > 0`) or decreasing Ω,
+/// until Ω leaves the bounds, the step size collapses (a non-smooth point such as grazing, or a
+/// lost orbit) or `max_points`.
 pub fn trace(
     model: &Model,
     start: (f64, f64, f64),
     dir: f64,
     o: ArcOptions,
-) -> Result<Vec<ArcPoint>, CliError> {
+) -> Result<Vec<ArcPoint>, SimError> {
     let p = o.period;
     let mut u = [start.1, start.2, start.0];
     let Ok(e) = evaluate(model, p, u) else {
@@ -256,7 +280,7 @@ pub fn trace(
     Ok(out)
 }
 
-/// Whether the orbit `(x, x')` at `Ω` lies on the traced polyline (within `tol`).
+/// Whether the orbit `(x, x')` at `Ω` lies on the traced polyline (within `tol`, max norm).
 pub fn covers(trace: &[ArcPoint], omega: f64, x: f64, v: f64, tol: f64) -> bool {
     trace.windows(2).any(|w| {
         let (a, b) = (w[0], w[1]);
@@ -273,6 +297,46 @@ pub fn covers(trace: &[ArcPoint], omega: f64, x: f64, v: f64, tol: f64) -> bool 
         let vi = a.v0 + s * (b.v0 - a.v0);
         (xi - x).abs().max((vi - v).abs()) <= tol
     })
+}
+
+/// Pseudo-arclength traces through every orbit in `found` (seed and orbit, ordered by grid
+/// point; `models[seed.point]` is its model) not already on a trace, in both directions (two
+/// threads), joined into one polyline each (decreasing-Ω part reversed, so each trace starts
+/// at its low-Ω end unless it turns). Traces of a single point are dropped.
+pub fn traces(
+    models: &[Model],
+    found: &[(Seed, Orbit)],
+    o: ArcOptions,
+) -> Result<Vec<Vec<ArcPoint>>, SimError> {
+    let mut traces: Vec<Vec<ArcPoint>> = Vec::new();
+    for (seed, orbit) in found {
+        let model = &models[seed.point];
+        let w = model.omega();
+        let (x, v) = orbit.point();
+        if traces.iter().any(|t| covers(t, w, x, v, COVERED)) {
+            continue;
+        }
+        let start = (w, x, v);
+        let (back, fwd) = std::thread::scope(|s| {
+            let b = s.spawn(|| trace(model, start, -1.0, o));
+            let f = trace(model, start, 1.0, o);
+            (b.join().expect("trace thread"), f)
+        });
+        let mut back = back?;
+        back.reverse();
+        back.extend(fwd?.into_iter().skip(1));
+        if back.len() > 1 {
+            traces.push(back);
+        }
+    }
+    Ok(traces)
+}
+
+/// Number of turning points of Ω (folds) along a trace.
+pub fn folds(t: &[ArcPoint]) -> usize {
+    t.windows(3)
+        .filter(|w| (w[1].omega - w[0].omega) * (w[2].omega - w[1].omega) < 0.0)
+        .count()
 }
 
 #[cfg(test)]
@@ -296,5 +360,25 @@ mod tests {
         .is_none());
         let t = tangent([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, -1.0).unwrap();
         assert_eq!(t, [0.0, 0.0, -1.0]);
+    }
+
+    #[test]
+    fn grid_options_and_folds() {
+        let o = ArcOptions::for_grid(1, &[2.0, 1.5, 1.0]);
+        assert_eq!(o.omega_bounds, (0.75, 2.25));
+        assert_eq!((o.ds_max, o.max_points), (0.5, 2000));
+        assert_eq!(ArcOptions::for_grid(2, &[1.0]).ds_max, 0.01);
+        let at = |omega| ArcPoint {
+            omega,
+            x0: 0.0,
+            v0: 0.0,
+            multipliers: [(0.5, 0.0); 2],
+            stable: true,
+            impacts: 1,
+            max_x: 0.1,
+        };
+        let t: Vec<ArcPoint> = [1.0, 1.2, 1.1, 1.0, 1.3].map(at).to_vec();
+        assert_eq!(folds(&t), 2);
+        assert!(covers(&t, 1.15, 0.0, 0.0, 1e-9) && !covers(&t, 1.4, 0.0, 0.0, 1e-9));
     }
 }

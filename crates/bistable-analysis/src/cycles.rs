@@ -1,35 +1,41 @@
 //! The steady state seen per shaker cycle: the largest displacement in each cycle, the phases
 //! of the impacts, and the stroboscopic section points (plate phase 0), for bifurcation
-//! diagrams, orbit seeds and spectra.
+//! diagrams, orbit seeds and orbit analysis.
 
-use bistable_core::{Event, Simulator, Sinusoid};
+use std::num::NonZeroU32;
 
-use crate::common::Model;
-use crate::error::CliError;
+use bistable_core::{Event, SimError, Simulator, Sinusoid};
+
+use crate::parallel::{self, Threads};
+use crate::progress::{OnProgress, Progress, Stage};
+use crate::Model;
 
 /// What [`record_cycles`] saw.
 #[derive(Debug, Clone, Default)]
 pub struct Cycles {
-    /// Largest `x` in each shaker cycle.
+    /// Largest `x` in each shaker cycle (units of `Δx`).
     pub max_x: Vec<f64>,
-    /// Impacts as `(cycle, phase in cycles)`.
+    /// Impacts as `(cycle, phase in cycles ∈ [0, 1))`; cycles count from 0 at the first
+    /// recorded one.
     pub impacts: Vec<(u32, f64)>,
     /// `(x, x')` at the start of each cycle and at the end of the last (one more than cycles).
     pub sections: Vec<(f64, f64)>,
 }
 
 /// Records `cycles` shaker cycles of `sim`, which must stand at the section instant
-/// `plate.section(first)`. The maximum of `x` in a cycle comes from `samples` dense-output
-/// samples per cycle, refined by the cubic Hermite interpolant of `(x, x')` on each interval
-/// where `x'` changes sign from + to − with no impact in between (error `O(h⁴)`). Samples sit
-/// at the same plate phases in every cycle, so a periodic response repeats exactly.
+/// `plate.section(first)`. The maximum of `x` in a cycle comes from `samples`
+/// dense-output samples per cycle, refined by the cubic Hermite interpolant of `(x, x')` on
+/// each interval where `x'` changes sign from + to − with no impact in between (error
+/// `O(h⁴)`). Samples sit at the same plate phases in every cycle, so a periodic response
+/// repeats exactly.
 pub fn record_cycles(
     sim: &mut Simulator,
     plate: Sinusoid,
     first: u64,
     cycles: u32,
-    samples: u32,
-) -> Result<Cycles, CliError> {
+    samples: NonZeroU32,
+) -> Result<Cycles, SimError> {
+    let samples = samples.get();
     let h = plate.period() / f64::from(samples);
     let mut out = Cycles::default();
     let st = sim.state();
@@ -89,18 +95,26 @@ fn hermite_max(x0: f64, v0: f64, x1: f64, v1: f64, h: f64) -> f64 {
     p(0.5 * (lo + hi)).max(x0).max(x1)
 }
 
-/// Runs the paper's initial condition for `transient` shaker periods, then records `cycles`.
+/// The simulator after `periods` shaker periods from the paper's initial condition, standing
+/// at the section instant `model.shaker.section(periods)` (plate phase 0).
+pub fn settled(model: &Model, periods: u32) -> Result<Simulator, SimError> {
+    let mut sim = model.simulator()?;
+    sim.advance_instant(
+        model.shaker.section(u64::from(periods)),
+        &mut |_: &Event| {},
+    )?;
+    Ok(sim)
+}
+
+/// Runs the paper's initial condition for `transient` shaker periods, then records `cycles`
+/// with `samples` samples per cycle (see [`record_cycles`]).
 pub fn steady_cycles(
     model: &Model,
     transient: u32,
     cycles: u32,
-    samples: u32,
-) -> Result<Cycles, CliError> {
-    let mut sim = model.simulator()?;
-    sim.advance_instant(
-        model.shaker.section(u64::from(transient)),
-        &mut |_: &Event| {},
-    )?;
+    samples: NonZeroU32,
+) -> Result<Cycles, SimError> {
+    let mut sim = settled(model, transient)?;
     record_cycles(
         &mut sim,
         model.shaker,
@@ -110,35 +124,41 @@ pub fn steady_cycles(
     )
 }
 
-/// Smallest `p <= max_p` with which the last `2p + 4` section points repeat to `tol`
-/// (relative to `max(1, |y|)`); `None` if there is none.
-pub fn detect_period(sections: &[(f64, f64)], max_p: usize, tol: f64) -> Option<usize> {
-    let n = sections.len();
-    (1..=max_p).find(|&p| {
-        let need = 3 * p + 4;
-        n >= need
-            && (n - (2 * p + 4)..n).all(|i| {
-                let (a, b) = (sections[i], sections[i - p]);
-                let scale = a.0.abs().max(a.1.abs()).max(1.0);
-                (a.0 - b.0).abs().max((a.1 - b.1).abs()) <= tol * scale
+/// [`steady_cycles`] at every model (in parallel, on `threads`), in the order of `models`;
+/// reports [`Stage::Simulating`] progress. The first simulation error stops the run.
+pub fn steady_cycles_over<E: From<SimError>>(
+    models: &[Model],
+    transient: u32,
+    cycles: u32,
+    samples: NonZeroU32,
+    threads: Threads,
+    progress: &mut OnProgress<'_, E>,
+) -> Result<Vec<Cycles>, E> {
+    let total = models.len();
+    let mut out: Vec<Option<Cycles>> = vec![None; total];
+    let mut finished = 0;
+    parallel::run(
+        models,
+        threads,
+        |m| steady_cycles(m, transient, cycles, samples),
+        |i, c| {
+            out[i] = Some(c?);
+            finished += 1;
+            progress(Progress {
+                stage: Stage::Simulating,
+                done: finished,
+                total,
             })
-    })
-}
-
-/// Number of distinct values, counting values within `tol·max(1, |x|)` of their sorted
-/// neighbour as one.
-pub fn distinct(values: &[f64], tol: f64) -> usize {
-    let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
-    v.sort_by(f64::total_cmp);
-    v.windows(2)
-        .filter(|w| w[1] - w[0] > tol * w[1].abs().max(1.0))
-        .count()
-        + usize::from(!v.is_empty())
+        },
+    )?;
+    Ok(out.into_iter().flatten().collect())
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::period::distinct;
+    use bistable_core::{Params, SolverOptions};
 
     #[test]
     fn hermite_max_is_exact_for_a_cubic() {
@@ -150,32 +170,14 @@ mod tests {
     }
 
     #[test]
-    fn periods_and_distinct_values() {
-        let p2: Vec<(f64, f64)> = (0..40)
-            .map(|i| if i % 2 == 0 { (0.1, 0.2) } else { (0.3, -0.1) })
-            .collect();
-        assert_eq!(detect_period(&p2, 16, 1e-9), Some(2));
-        let drift: Vec<(f64, f64)> = (0..40).map(|i| (0.1 + 1e-3 * f64::from(i), 0.0)).collect();
-        assert_eq!(detect_period(&drift, 16, 1e-9), None);
-        assert_eq!(distinct(&[0.1, 0.1 + 1e-12, 0.2, 0.3, 0.2], 1e-9), 3);
-        assert_eq!(distinct(&[], 1e-9), 0);
-    }
-
-    #[test]
     fn max_per_cycle_of_a_period_one_response_repeats() {
-        let model = crate::common::Model::new(
-            &crate::common::ModelArgs {
-                zeta: 0.02,
-                restitution: 0.85,
-                tol: 1e-16,
-                chatter: crate::common::Chatter::Accumulation,
-                json: false,
-            },
-            1.75,
-            0.07,
-        )
-        .unwrap();
-        let c = steady_cycles(&model, 600, 6, 128).unwrap();
+        let model = Model::new(
+            Params::new(0.02, 0.85).unwrap(),
+            Sinusoid::new(1.75, 0.07).unwrap(),
+            SolverOptions::default(),
+        );
+        let n = |k| NonZeroU32::new(k).unwrap();
+        let c = steady_cycles(&model, 600, 6, n(128)).unwrap();
         assert_eq!(c.max_x.len(), 6);
         assert_eq!(c.sections.len(), 7);
         assert_eq!(distinct(&c.max_x, 1e-9), 1, "{:?}", c.max_x);
@@ -186,7 +188,7 @@ mod tests {
             1
         );
         // The refined maximum beats the plain samples by a little, never by much.
-        let coarse = steady_cycles(&model, 600, 1, 16).unwrap().max_x[0];
+        let coarse = steady_cycles(&model, 600, 1, n(16)).unwrap().max_x[0];
         assert!(c.max_x[0] >= coarse - 1e-9 && c.max_x[0] - coarse < 1e-3);
         assert!(
             (coarse - c.max_x[0]).abs() < 1e-6,

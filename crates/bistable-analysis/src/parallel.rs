@@ -1,0 +1,153 @@
+//! Work spread over threads: items are handed out one at a time (so uneven costs balance) and
+//! the results come back to the calling thread in completion order, where the caller can show
+//! progress, store or write them, or cancel the run.
+
+use std::num::NonZeroUsize;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+
+/// A number of worker threads (at least one).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub struct Threads(NonZeroUsize);
+
+impl Threads {
+    /// `n` threads; `None` for 0.
+    pub fn new(n: usize) -> Option<Self> {
+        NonZeroUsize::new(n).map(Self)
+    }
+
+    /// One thread per core (2 if the number of cores is unknown).
+    pub fn all() -> Self {
+        const UNKNOWN: NonZeroUsize = NonZeroUsize::new(2).expect("2 > 0");
+        Self(std::thread::available_parallelism().unwrap_or(UNKNOWN))
+    }
+
+    /// The number of threads.
+    pub fn get(self) -> usize {
+        self.0.get()
+    }
+}
+
+/// Computes `work(item)` for every item on `threads` threads (at most one per item) and passes
+/// each `(index, result)` to `done` on the calling thread as it completes.
+///
+/// `done` is the progress callback and the cancellation point: when it returns an error the
+/// workers take no new items, the items in progress finish and are dropped, and the error is
+/// returned.
+pub fn run<T: Sync, R: Send, E>(
+    items: &[T],
+    threads: Threads,
+    work: impl Fn(&T) -> R + Sync,
+    mut done: impl FnMut(usize, R) -> Result<(), E>,
+) -> Result<(), E> {
+    if items.is_empty() {
+        return Ok(());
+    }
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let (tx, rx) = mpsc::channel::<(usize, R)>();
+        for _ in 0..threads.get().min(items.len()) {
+            let tx = tx.clone();
+            let (next, stop, work) = (&next, &stop, &work);
+            s.spawn(move || {
+                while !stop.load(Ordering::Relaxed) {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    let Some(item) = items.get(i) else { break };
+                    if tx.send((i, work(item))).is_err() {
+                        break;
+                    }
+                }
+            });
+        }
+        drop(tx);
+        let mut result = Ok(());
+        for (i, r) in rx.iter() {
+            result = done(i, r);
+            if result.is_err() {
+                break;
+            }
+        }
+        stop.store(true, Ordering::Relaxed);
+        result
+    })
+}
+
+/// Computes `work(item)` for every item on `threads` threads and returns the results in the
+/// order of `items`; `progress(done)` is called on the calling thread after each completed
+/// item (with the number completed so far) and cancels the run by returning an error.
+pub fn map<T: Sync, R: Send, E>(
+    items: &[T],
+    threads: Threads,
+    work: impl Fn(&T) -> R + Sync,
+    mut progress: impl FnMut(usize) -> Result<(), E>,
+) -> Result<Vec<R>, E> {
+    let mut out: Vec<Option<R>> = std::iter::repeat_with(|| None).take(items.len()).collect();
+    let mut finished = 0;
+    run(items, threads, work, |i, r| {
+        out[i] = Some(r);
+        finished += 1;
+        progress(finished)
+    })?;
+    Ok(out.into_iter().flatten().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_item_once_and_errors_stop_the_run() {
+        let items: Vec<u64> = (0..500).collect();
+        let mut seen = vec![0u32; items.len()];
+        run(
+            &items,
+            Threads::new(3).unwrap(),
+            |&x| x * x,
+            |i, r| {
+                assert_eq!(r, items[i] * items[i]);
+                seen[i] += 1;
+                Ok::<(), ()>(())
+            },
+        )
+        .unwrap();
+        assert!(seen.iter().all(|&n| n == 1));
+        let mut calls = 0;
+        let r = run(
+            &items,
+            Threads::new(2).unwrap(),
+            |&x| x,
+            |_, _| {
+                calls += 1;
+                if calls == 10 {
+                    Err("stop")
+                } else {
+                    Ok(())
+                }
+            },
+        );
+        assert_eq!(r, Err("stop"));
+        assert_eq!(calls, 10);
+    }
+
+    #[test]
+    fn map_keeps_the_order_of_the_items() {
+        let items: Vec<u64> = (0..100).collect();
+        let mut last = 0;
+        let out = map(
+            &items,
+            Threads::new(4).unwrap(),
+            |&x| 2 * x,
+            |n| {
+                last = n;
+                Ok::<(), ()>(())
+            },
+        );
+        assert_eq!(
+            out.unwrap(),
+            items.iter().map(|x| 2 * x).collect::<Vec<_>>()
+        );
+        assert_eq!(last, 100);
+        assert!(Threads::new(0).is_none() && Threads::all().get() >= 1);
+    }
+}
