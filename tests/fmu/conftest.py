@@ -1,10 +1,12 @@
 """Fixtures for the FMU tests: the packaged FMU (built by `make fmu`) and a small fmpy driver."""
 import re
 import shutil
+from ctypes import CFUNCTYPE, c_char_p, c_int, c_void_p, cast
 
 import pytest
-from fmpy import extract, read_model_description
-from fmpy.fmi2 import FMU2Slave
+from fmpy import calloc, extract, free, read_model_description
+from fmpy.fmi2 import (FMU2Slave, fmi2CallbackAllocateMemoryTYPE, fmi2CallbackFreeMemoryTYPE,
+                       fmi2CallbackFunctions, fmi2CallbackLoggerTYPE)
 
 from cases import FMU, ROOT
 
@@ -23,6 +25,30 @@ def parse_impacts(messages):
         if hit:
             out.append((int(hit[1]),) + tuple(float(g) for g in hit.groups()[1:]))
     return out
+
+
+#: The logger as this FMU calls it: `logger(env, name, status, category, "%s", message)`.
+LOGGER = CFUNCTYPE(None, c_void_p, c_char_p, c_int, c_char_p, c_char_p, c_char_p)
+
+
+class Callbacks:
+    """FMI 2.0 callbacks whose logger appends `(status, category, message)` to `messages`.
+
+    The logger is called directly, not through fmpy's logger proxy (its default callbacks and
+    `simulate_fmu` use one): the proxy keeps a single process-wide pointer to the Python logger it
+    wrapped last, which dangles once that call's callback object is collected, so a long-lived
+    instance logging through it (a refused call logs an error) can crash the interpreter."""
+
+    def __init__(self):
+        self.messages = []
+        self._logger = LOGGER(self._log)
+        self.struct = fmi2CallbackFunctions()
+        self.struct.logger = cast(self._logger, fmi2CallbackLoggerTYPE)
+        self.struct.allocateMemory = fmi2CallbackAllocateMemoryTYPE(calloc)
+        self.struct.freeMemory = fmi2CallbackFreeMemoryTYPE(free)
+
+    def _log(self, env, name, status, category, fmt, message):
+        self.messages.append((status, category.decode(), message.decode(errors="replace")))
 
 
 @pytest.fixture(scope="session")
@@ -53,7 +79,8 @@ class Slave:
         self.types = {v.name: v.type for v in md.modelVariables}
         self.fmu = FMU2Slave(guid=md.guid, unzipDirectory=unzipped,
                              modelIdentifier=md.coSimulation.modelIdentifier, instanceName=name)
-        self.fmu.instantiate(loggingOn=logging)
+        self.callbacks = Callbacks()
+        self.fmu.instantiate(callbacks=self.callbacks.struct, loggingOn=logging)
         self.t = 0.0
 
     def set(self, **values):

@@ -276,10 +276,14 @@ def test_terminated_status_after_a_step_that_cannot_finish(slave):
 
 def test_wrong_guid_and_bad_values_are_refused(md, unzipped, slave):
     from fmpy.fmi2 import FMU2Slave
+
+    from conftest import Callbacks
     bad = FMU2Slave(guid="{not-the-guid}", unzipDirectory=unzipped,
                     modelIdentifier=md.coSimulation.modelIdentifier, instanceName="bad")
+    callbacks = Callbacks()
     with pytest.raises(Exception):
-        bad.instantiate()
+        bad.instantiate(callbacks=callbacks.struct)
+    assert any("guid" in m for _, _, m in callbacks.messages), callbacks.messages
     s = slave()
     s.fmu.setupExperiment(startTime=0.0)
     for name, value in [("e", 1.5), ("zeta", math.nan), ("omega0", 0.0), ("tol", 1.0)]:
