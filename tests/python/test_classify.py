@@ -61,3 +61,38 @@ def test_classify_paper_examples():
     r = bi.classify(0.85, 0.11)
     assert (r["class"], r["period"]) == ("intrawell", 4)
     assert bi.classify(0.85, 0.15)["at_rest_in_second_well"] is True
+
+
+def test_sweep_map_store_skips_points_already_computed(tmp_path):
+    pytest.importorskip("pandas")
+    store = str(tmp_path / "map.csv")
+    a = bi.sweep.map([0.85, 1.5], [0.07], store=store, **OPTS)
+    b = bi.sweep.map([0.85, 1.5, 2.0], [0.07], store=store, **OPTS)
+    assert list(b["wall_time_s"][:2]) == list(a["wall_time_s"])  # read back, not recomputed
+    assert len(b) == 3
+    import pandas as pd
+
+    assert len(pd.read_csv(store)) == 3
+
+
+def test_sweep_map_on_a_dask_client_equals_the_cli(cli_grid):
+    pd = pytest.importorskip("pandas")
+    distributed = pytest.importorskip("distributed")
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as client:
+        df = bi.sweep.map(OMEGAS[:3], VELOCITIES[:2], client=client, chunk=2, **OPTS)
+    assert len(df) == 6
+    for row in df.to_dict("records"):
+        expected = without_time(cli_grid[(row["omega"], row["velocity"])])
+        got = {k: (None if pd.isna(v) else v) for k, v in without_time(row).items()}
+        assert got == expected, (row["omega"], row["velocity"])
+
+
+def test_sweep_map_arguments():
+    with pytest.raises(ValueError, match="'chunk'"):
+        bi.sweep.map([1.0], [0.1], chunk=0)
+    with pytest.raises(ValueError, match="'lyapunov_periods'"):
+        bi.sweep.map([1.0], [0.1], lyapunov_periods=0)
+    with pytest.raises(ValueError, match="'omega'"):
+        bi.sweep.map([-1.0], [0.1])
