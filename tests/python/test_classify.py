@@ -96,3 +96,24 @@ def test_sweep_map_arguments():
         bi.sweep.map([1.0], [0.1], lyapunov_periods=0)
     with pytest.raises(ValueError, match="'omega'"):
         bi.sweep.map([-1.0], [0.1])
+
+
+def test_module_entry_point(tmp_path):
+    import subprocess
+    import sys
+
+    out = tmp_path / "m.csv"
+    r = subprocess.run(
+        [sys.executable, "-m", "bistable_impact", "map", "--omega-range", "0.85:1.5:2",
+         "--velocity-range", "0.07:0.07:1", "--max-periods", "300", "--lyapunov-periods", "50",
+         "--out", str(out)],
+        capture_output=True, text=True,
+    )
+    assert r.returncode == 0, r.stderr
+    assert out.read_text().splitlines()[0] == ",".join(bi.sweep.COLUMNS)
+    r = subprocess.run(
+        [sys.executable, "-m", "bistable_impact", "map", "--omega-range=-1:1:2",
+         "--velocity-range", "0.07:0.07:1"],
+        capture_output=True, text=True,
+    )
+    assert r.returncode == 2 and "'omega'" in r.stderr
