@@ -15,6 +15,7 @@ DEMO_TARGETS :=
 STRESS_TARGETS := stress-core
 -include fmu/fmu.mk
 -include ros/ros.mk
+-include python.mk
 
 setup:
 	bash scripts/setup.sh

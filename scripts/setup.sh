@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Installs everything the build, the tests and the demo need: Debian packages listed in
 # scripts/apt-packages.txt (only those missing), a Python venv at .venv with
-# scripts/requirements.txt, and the patched dependencies in .deps/ (scripts/patch-deps.sh). Safe to run repeatedly; does nothing when all is in place.
+# scripts/requirements.txt, the patched dependencies in .deps/ (scripts/patch-deps.sh) and the
+# Python package crates/bistable-py. Safe to run repeatedly; does nothing when all is in place.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
@@ -27,3 +28,16 @@ if [ ! -x .venv/bin/python ] || ! cmp -s scripts/requirements.txt "$stamp"; then
 fi
 
 bash scripts/patch-deps.sh
+
+# The Python package bistable_impact (crates/bistable-py) in .venv, rebuilt only when its sources
+# or those of the crates it wraps change (a hash of them is kept in the stamp).
+py_stamp=.venv/.bistable-py.stamp
+py_hash=$(find crates/bistable-py crates/bistable-core crates/bistable-analysis Cargo.toml Cargo.lock \
+  -type f \( -name '*.rs' -o -name '*.py' -o -name '*.pyi' -o -name '*.toml' -o -name '*.lock' \
+  -o -name py.typed -o -name '*.md' \) -not -path '*/__pycache__/*' -not -path '*/benches/*' \
+  -not -path '*/tests/*' -not -path '*/examples/*' | LC_ALL=C sort | xargs sha256sum | sha256sum | cut -d' ' -f1)
+if [ "$(cat "$py_stamp" 2>/dev/null)" != "$py_hash" ]; then
+  echo "setup: installing the Python package bistable_impact (crates/bistable-py) into .venv"
+  .venv/bin/pip install -q crates/bistable-py
+  echo "$py_hash" >"$py_stamp"
+fi

@@ -5,12 +5,14 @@
 //! before it. Options are a `u8` tag (0/1) followed by the value; enums are `u8` tags. Decoding
 //! refuses a wrong magic, version, length, checksum or guid, truncation, unknown tags and
 //! trailing bytes; the instance then checks the values themselves (ranges, core checkpoint).
+//! The field writer and reader and the layout of the core checkpoint inside are
+//! `bistable_core::codec`'s (shared with the core's own checkpoint byte format).
 
-use bistable_core::sampled::MAX_SAMPLES;
-use bistable_core::{
-    ChatterRule, Checkpoint, ContactMode, Impact, Instant, PlateRecord, Sample, Stats, StickCause,
-    Well,
+use bistable_core::codec::{
+    checksum, get_checkpoint, get_impact, put_checkpoint, put_impact, Reader, Res, Writer, CAUSES,
 };
+use bistable_core::sampled::MAX_SAMPLES;
+use bistable_core::{ContactMode, Instant, Sample, Well};
 
 use crate::instance::{Interface, Lifecycle};
 use crate::md::GUID;
@@ -47,106 +49,6 @@ pub struct Snapshot {
     pub me: Option<SavedMe>,
 }
 
-struct Writer(Vec<u8>);
-
-impl Writer {
-    fn u8(&mut self, v: u8) {
-        self.0.push(v);
-    }
-    fn u32(&mut self, v: u32) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    fn u64(&mut self, v: u64) {
-        self.0.extend_from_slice(&v.to_le_bytes());
-    }
-    fn f64(&mut self, v: f64) {
-        self.u64(v.to_bits());
-    }
-    fn pair(&mut self, (a, b): (f64, f64)) {
-        self.f64(a);
-        self.f64(b);
-    }
-    fn opt<T>(&mut self, v: Option<T>, put: impl FnOnce(&mut Self, T)) {
-        match v {
-            None => self.u8(0),
-            Some(x) => {
-                self.u8(1);
-                put(self, x);
-            }
-        }
-    }
-}
-
-/// Reads fields in order; every read checks the remaining length.
-struct Reader<'a> {
-    bytes: &'a [u8],
-    pos: usize,
-}
-
-type Res<T> = Result<T, String>;
-
-impl<'a> Reader<'a> {
-    fn take(&mut self, n: usize) -> Res<&'a [u8]> {
-        let end = self.pos.checked_add(n).filter(|&e| e <= self.bytes.len());
-        let end = end.ok_or_else(|| {
-            format!(
-                "truncated FMU state: {n} more bytes needed at byte {}",
-                self.pos
-            )
-        })?;
-        let s = &self.bytes[self.pos..end];
-        self.pos = end;
-        Ok(s)
-    }
-    fn u8(&mut self) -> Res<u8> {
-        Ok(self.take(1)?[0])
-    }
-    fn u32(&mut self) -> Res<u32> {
-        Ok(u32::from_le_bytes(
-            self.take(4)?.try_into().unwrap_or_default(),
-        ))
-    }
-    fn u64(&mut self) -> Res<u64> {
-        Ok(u64::from_le_bytes(
-            self.take(8)?.try_into().unwrap_or_default(),
-        ))
-    }
-    fn f64(&mut self) -> Res<f64> {
-        Ok(f64::from_bits(self.u64()?))
-    }
-    fn pair(&mut self) -> Res<(f64, f64)> {
-        Ok((self.f64()?, self.f64()?))
-    }
-    fn tag(&mut self, what: &str, count: u8) -> Res<u8> {
-        let t = self.u8()?;
-        if t < count {
-            Ok(t)
-        } else {
-            Err(format!(
-                "corrupt FMU state: invalid {what} tag {t} at byte {}",
-                self.pos - 1
-            ))
-        }
-    }
-    fn bool(&mut self, what: &str) -> Res<bool> {
-        Ok(self.tag(what, 2)? == 1)
-    }
-    fn opt<T>(&mut self, what: &str, get: impl FnOnce(&mut Self) -> Res<T>) -> Res<Option<T>> {
-        if self.bool(what)? {
-            get(self).map(Some)
-        } else {
-            Ok(None)
-        }
-    }
-}
-
-/// FNV-1a, 64 bits.
-fn checksum(bytes: &[u8]) -> u64 {
-    bytes.iter().fold(0xcbf2_9ce4_8422_2325, |h, &b| {
-        (h ^ u64::from(b)).wrapping_mul(0x0100_0000_01b3)
-    })
-}
-
 const LIFECYCLES: [Lifecycle; 8] = [
     Lifecycle::Instantiated,
     Lifecycle::InitializationMode,
@@ -158,13 +60,6 @@ const LIFECYCLES: [Lifecycle; 8] = [
     Lifecycle::ContinuousTimeMode,
 ];
 const INTERFACES: [Interface; 2] = [Interface::ModelExchange, Interface::CoSimulation];
-const CAUSES: [StickCause; 4] = [
-    StickCause::Accumulation,
-    StickCause::FixedGap,
-    StickCause::Plastic,
-    StickCause::ZenoGuard,
-];
-
 fn index_of<T: PartialEq>(all: &[T], v: &T) -> u8 {
     all.iter().position(|x| x == v).unwrap_or_default() as u8
 }
@@ -211,7 +106,7 @@ impl Snapshot {
 
     /// Parses bytes made by [`Snapshot::serialize`], refusing anything else.
     pub fn deserialize(bytes: &[u8]) -> Res<Self> {
-        let mut r = Reader { bytes, pos: 0 };
+        let mut r = Reader::new(bytes, "FMU state");
         if r.take(MAGIC.len())? != MAGIC {
             return Err("not a bistable_impact FMU state (wrong magic bytes)".into());
         }
@@ -304,30 +199,6 @@ fn get_history(r: &mut Reader) -> Res<Vec<(Sample, bool)>> {
         .collect()
 }
 
-fn put_impact(w: &mut Writer, i: &Impact) {
-    w.u64(i.index);
-    w.f64(i.t);
-    w.opt(i.phase, Writer::f64);
-    w.f64(i.x);
-    w.f64(i.v_before);
-    w.f64(i.v_after);
-    w.f64(i.zdot);
-    w.f64(i.delta_k);
-}
-
-fn get_impact(r: &mut Reader) -> Res<Impact> {
-    Ok(Impact {
-        index: r.u64()?,
-        t: r.f64()?,
-        phase: r.opt("phase", Reader::f64)?,
-        x: r.f64()?,
-        v_before: r.f64()?,
-        v_after: r.f64()?,
-        zdot: r.f64()?,
-        delta_k: r.f64()?,
-    })
-}
-
 fn put_me(w: &mut Writer, m: &SavedMe) {
     let (a, b, c, d, e, f) = m.phase_ref;
     [a, b, c, d, e, f].iter().for_each(|&v| w.f64(v));
@@ -385,137 +256,12 @@ fn get_me(r: &mut Reader) -> Res<SavedMe> {
     })
 }
 
-fn put_checkpoint(w: &mut Writer, c: &Checkpoint) {
-    w.f64(c.zeta);
-    w.f64(c.restitution);
-    w.f64(c.tol);
-    w.u64(c.order as u64);
-    match c.chatter {
-        ChatterRule::Accumulation { horizon } => {
-            w.u8(0);
-            w.f64(horizon);
-        }
-        ChatterRule::FixedGap { gap } => {
-            w.u8(1);
-            w.f64(gap);
-        }
-    }
-    w.u32(c.max_chatter_impacts);
-    match c.plate {
-        PlateRecord::Sinusoid {
-            omega,
-            velocity,
-            origin,
-            phase0,
-            offset,
-        } => {
-            w.u8(0);
-            [omega, velocity].iter().for_each(|&v| w.f64(v));
-            w.pair(origin);
-            [phase0, offset].iter().for_each(|&v| w.f64(v));
-        }
-        PlateRecord::Poly { start, end, coeffs } => {
-            w.u8(1);
-            w.pair(start);
-            w.pair(end);
-            coeffs.iter().for_each(|&v| w.f64(v));
-        }
-    }
-    w.pair(c.t0);
-    w.u8(u8::from(c.mode == ContactMode::Sticking));
-    w.f64(c.u0);
-    w.f64(c.w0);
-    w.u8(c.pinned);
-    w.u8(u8::from(c.on_barrier));
-    w.u8(u8::from(c.well == Well::Two));
-    w.pair(c.now);
-    w.opt(c.last_impact.as_ref(), put_impact);
-    w.opt(c.last_impact_t, Writer::pair);
-    w.u32(c.short_flights);
-    let s = c.stats;
-    [s.steps, s.impacts, s.sticks, s.snap_throughs]
-        .iter()
-        .for_each(|&v| w.u64(v));
-    w.opt(c.tail, |w, (len, cause)| {
-        w.f64(len);
-        w.u8(index_of(&CAUSES, &cause));
-    });
-}
-
-fn get_checkpoint(r: &mut Reader) -> Res<Checkpoint> {
-    let zeta = r.f64()?;
-    let restitution = r.f64()?;
-    let tol = r.f64()?;
-    let order = usize::try_from(r.u64()?).map_err(|_| "corrupt FMU state: order".to_string())?;
-    let chatter = match r.tag("chatter rule", 2)? {
-        0 => ChatterRule::Accumulation { horizon: r.f64()? },
-        _ => ChatterRule::FixedGap { gap: r.f64()? },
-    };
-    let max_chatter_impacts = r.u32()?;
-    let plate = match r.tag("plate", 2)? {
-        0 => PlateRecord::Sinusoid {
-            omega: r.f64()?,
-            velocity: r.f64()?,
-            origin: r.pair()?,
-            phase0: r.f64()?,
-            offset: r.f64()?,
-        },
-        _ => {
-            let start = r.pair()?;
-            let end = r.pair()?;
-            let mut coeffs = [0.0; MAX_PLATE_ORDER + 1];
-            for c in coeffs.iter_mut() {
-                *c = r.f64()?;
-            }
-            PlateRecord::Poly { start, end, coeffs }
-        }
-    };
-    Ok(Checkpoint {
-        zeta,
-        restitution,
-        tol,
-        order,
-        chatter,
-        max_chatter_impacts,
-        plate,
-        t0: r.pair()?,
-        mode: if r.bool("contact mode")? {
-            ContactMode::Sticking
-        } else {
-            ContactMode::Free
-        },
-        u0: r.f64()?,
-        w0: r.f64()?,
-        pinned: r.u8()?,
-        on_barrier: r.bool("on_barrier")?,
-        well: if r.bool("well")? {
-            Well::Two
-        } else {
-            Well::One
-        },
-        now: r.pair()?,
-        last_impact: r.opt("last impact", get_impact)?,
-        last_impact_t: r.opt("last impact time", Reader::pair)?,
-        short_flights: r.u32()?,
-        stats: Stats {
-            steps: r.u64()?,
-            impacts: r.u64()?,
-            sticks: r.u64()?,
-            snap_throughs: r.u64()?,
-        },
-        tail: r.opt("chatter tail", |r| {
-            let len = r.f64()?;
-            let cause = CAUSES[usize::from(r.tag("stick cause", CAUSES.len() as u8)?)];
-            Ok((len, cause))
-        })?,
-    })
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::md::{var, VARS};
     use crate::model::Model;
+    use bistable_core::PlateRecord;
 
     /// Snapshots of models in both shaker modes, one riding a chatter tail or stuck.
     fn samples() -> Vec<Snapshot> {

@@ -34,6 +34,7 @@ pub mod orbit;
 pub mod parallel;
 pub mod period;
 pub mod progress;
+pub mod record;
 pub mod schedule;
 pub mod seeds;
 pub mod spectrum;

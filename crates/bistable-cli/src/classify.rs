@@ -4,7 +4,7 @@
 use clap::Args;
 use serde::Serialize;
 
-use bistable_analysis::sweep::{classify_point, Classified};
+use bistable_analysis::sweep::classify_point;
 use bistable_core::ClassifyOptions;
 
 use crate::common::CommonArgs;
@@ -80,30 +80,14 @@ pub struct ClassifyArgs {
 impl ClassifyArgs {
     /// Validated core options; `lyapunov_default` applies when `--lyapunov-periods` is absent.
     pub fn options(&self, lyapunov_default: u32) -> Result<ClassifyOptions, CliError> {
-        let p = self.max_periods;
-        if !(1.0..=1e8).contains(&p) {
-            return Err(CliError::invalid("--max-periods", p, "must be in [1, 1e8]"));
-        }
-        if !(1..=64).contains(&self.max_period) {
-            return Err(CliError::invalid_text(
-                "--max-period",
-                self.max_period,
-                "must be in [1, 64]",
-            ));
-        }
-        let t = self.period_tol;
-        if !(t.is_finite() && t > 0.0 && t <= 1e-3) {
-            return Err(CliError::invalid("--period-tol", t, "must be in (0, 1e-3]"));
-        }
-        let lyapunov_periods = self.lyapunov_periods.unwrap_or(lyapunov_default);
-        CliError::at_least("--lyapunov-periods", lyapunov_periods, 1)?;
         Ok(ClassifyOptions {
-            max_natural_periods: p,
+            max_natural_periods: self.max_periods,
             full_length: self.full,
             max_period: self.max_period,
-            period_tol: t,
-            lyapunov_periods,
-        })
+            period_tol: self.period_tol,
+            lyapunov_periods: self.lyapunov_periods.unwrap_or(lyapunov_default),
+        }
+        .check()?)
     }
 }
 
@@ -117,112 +101,49 @@ pub struct ClassifyCmdArgs {
     pub classify: ClassifyArgs,
 }
 
-/// One classified point: what `classify` prints and what `map` writes per row.
-#[derive(Debug, Clone, PartialEq, Serialize)]
-pub struct Record {
-    /// `Ω`.
-    pub omega: f64,
-    /// `V`.
-    pub velocity: f64,
-    /// `ζ`.
-    pub zeta: f64,
-    /// `e`.
-    pub restitution: f64,
-    /// `intrawell`, `transient_interwell` or `continuous_interwell`.
-    pub class: String,
-    /// Steady-state period in shaker periods; `None` when aperiodic.
-    pub period: Option<u32>,
-    /// Aperiodic with a positive largest Lyapunov exponent.
-    pub chaotic: bool,
-    /// Largest Lyapunov exponent (per unit of τ) of an aperiodic response.
-    pub lyapunov: Option<f64>,
-    /// Barrier crossings over the whole run.
-    pub snap_throughs: u64,
-    /// 1 or 2.
-    pub final_well: u8,
-    /// Converged to rest at the second equilibrium.
-    pub at_rest_in_second_well: bool,
-    /// Impacts per steady-state period.
-    pub impacts_per_period: Option<u64>,
-    /// The steady state includes sticking.
-    pub sticking: bool,
-    /// Natural periods simulated.
-    pub periods_simulated: f64,
-    /// Stopped before the full length.
-    pub stopped_early: bool,
-    /// Wall-clock time of this point.
-    pub wall_time_s: f64,
+pub use bistable_analysis::record::{Record, COLUMNS as CSV_COLUMNS};
+use bistable_analysis::record::{Value, CLASSES};
+
+/// A [`Record`] as the JSON object `classify` prints (keys and order of [`CSV_COLUMNS`]).
+pub struct Json<'a>(pub &'a Record);
+
+impl Serialize for Json<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(Some(CSV_COLUMNS.len()))?;
+        for (k, v) in self.0.pairs() {
+            match v {
+                Value::F(x) => m.serialize_entry(k, &x)?,
+                Value::I(n) => m.serialize_entry(k, &n)?,
+                Value::Bool(b) => m.serialize_entry(k, &b)?,
+                Value::S(t) => m.serialize_entry(k, t)?,
+                Value::Null => m.serialize_entry(k, &None::<u8>)?,
+            }
+        }
+        m.end()
+    }
 }
 
-/// Column names of [`Record`] in CSV files, in order.
-pub const CSV_COLUMNS: [&str; 16] = [
-    "omega",
-    "velocity",
-    "zeta",
-    "restitution",
-    "class",
-    "period",
-    "chaotic",
-    "lyapunov",
-    "snap_throughs",
-    "final_well",
-    "at_rest_in_second_well",
-    "impacts_per_period",
-    "sticking",
-    "periods_simulated",
-    "stopped_early",
-    "wall_time_s",
-];
-
-impl Record {
-    /// The record of a classified point.
-    pub fn new(point: &Classified) -> Self {
-        let (m, c) = (&point.model, &point.classification);
-        Self {
-            omega: m.omega(),
-            velocity: m.velocity(),
-            zeta: m.params.zeta(),
-            restitution: m.restitution(),
-            class: c.class.name().to_string(),
-            period: c.period,
-            chaotic: c.chaotic,
-            lyapunov: c.lyapunov,
-            snap_throughs: c.snap_throughs,
-            final_well: c.final_well.number(),
-            at_rest_in_second_well: c.at_rest_in_second_well,
-            impacts_per_period: c.impacts_per_period,
-            sticking: c.sticking,
-            periods_simulated: c.periods_simulated,
-            stopped_early: c.stopped_early,
-            wall_time_s: point.wall_time_s,
-        }
-    }
-
+/// The CSV form of a [`Record`] (one row of `bistable map`).
+pub trait RecordCsv: Sized {
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
-    pub fn fields(&self) -> [Field<'_>; 16] {
-        let opt_i = |v: Option<u64>| v.map_or(Field::Empty, Field::I);
-        [
-            Field::F(self.omega),
-            Field::F(self.velocity),
-            Field::F(self.zeta),
-            Field::F(self.restitution),
-            Field::S(&self.class),
-            opt_i(self.period.map(u64::from)),
-            Field::flag(self.chaotic),
-            self.lyapunov.map_or(Field::Empty, Field::F),
-            Field::I(self.snap_throughs),
-            Field::I(u64::from(self.final_well)),
-            Field::flag(self.at_rest_in_second_well),
-            opt_i(self.impacts_per_period),
-            Field::flag(self.sticking),
-            Field::F(self.periods_simulated),
-            Field::flag(self.stopped_early),
-            Field::F(self.wall_time_s),
-        ]
+    fn fields(&self) -> [Field<'_>; 16];
+    /// Parses a CSV row written with [`RecordCsv::fields`] (columns as in [`CSV_COLUMNS`]).
+    fn from_csv(cells: &[&str]) -> Result<Self, String>;
+}
+
+impl RecordCsv for Record {
+    fn fields(&self) -> [Field<'_>; 16] {
+        self.values().map(|v| match v {
+            Value::F(x) => Field::F(x),
+            Value::I(n) => Field::I(n),
+            Value::Bool(b) => Field::flag(b),
+            Value::S(t) => Field::S(t),
+            Value::Null => Field::Empty,
+        })
     }
 
-    /// Parses a CSV row written with [`Record::fields`] (columns as in [`CSV_COLUMNS`]).
-    pub fn from_csv(cells: &[&str]) -> Result<Self, String> {
+    fn from_csv(cells: &[&str]) -> Result<Self, String> {
         if cells.len() != CSV_COLUMNS.len() {
             return Err(format!(
                 "{} fields, expected {}",
@@ -243,7 +164,7 @@ impl Record {
             }
         }
         let class = cells[4];
-        if !["intrawell", "transient_interwell", "continuous_interwell"].contains(&class) {
+        if !CLASSES.contains(&class) {
             return Err(format!("bad class '{class}'"));
         }
         Ok(Self {
@@ -273,7 +194,7 @@ pub fn run(args: &ClassifyCmdArgs) -> Result<(), CliError> {
     let co = args
         .classify
         .options(ClassifyOptions::default().lyapunov_periods)?;
-    print_json(&Record::new(&classify_point(&model, co)?))
+    print_json(&Json(&Record::new(&classify_point(&model, co)?)))
 }
 
 #[cfg(test)]

@@ -140,6 +140,10 @@ impl From<ParamError> for CliError {
             "zeta" => "--zeta",
             "restitution" => "--restitution",
             "tol" => "--tol",
+            "max_periods" => "--max-periods",
+            "max_period" => "--max-period",
+            "period_tol" => "--period-tol",
+            "lyapunov_periods" => "--lyapunov-periods",
             other => return CliError::invalid(other, e.value, e.rule),
         };
         CliError::invalid(option, e.value, e.rule)

@@ -15,7 +15,7 @@ use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
 use bistable_analysis::{Model, Threads};
 use bistable_core::ClassifyOptions;
 
-use crate::classify::{ClassifyArgs, Record, CSV_COLUMNS};
+use crate::classify::{ClassifyArgs, Record, RecordCsv, CSV_COLUMNS};
 use crate::common::{threads, ModelArgs};
 use crate::error::CliError;
 use crate::output::{print_json, print_text, CsvFile};

@@ -15,7 +15,7 @@
 use std::collections::VecDeque;
 
 use crate::events::{Event, Well};
-use crate::params::{Params, SolverOptions};
+use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER_ENERGY};
 use crate::shaker::Sinusoid;
 use crate::simulator::{SimError, Simulator};
@@ -66,6 +66,38 @@ impl Default for ClassifyOptions {
             period_tol: 1e-8,
             lyapunov_periods: 2_000,
         }
+    }
+}
+
+impl ClassifyOptions {
+    /// Checks the settings, in the order of the fields: `max_periods` (the natural periods,
+    /// in `[1, 1e8]`), `max_period` (`[1, 64]`), `period_tol` (`(0, 1e-3]`) and
+    /// `lyapunov_periods` (`>= 1`); the error names the first bad one.
+    pub fn check(&self) -> Result<Self, ParamError> {
+        let p = self.max_natural_periods;
+        check(
+            "max_periods",
+            p,
+            (1.0..=1e8).contains(&p),
+            "must be in [1, 1e8]",
+        )?;
+        let m = self.max_period;
+        check(
+            "max_period",
+            f64::from(m),
+            (1..=64).contains(&m),
+            "must be in [1, 64]",
+        )?;
+        let t = self.period_tol;
+        check(
+            "period_tol",
+            t,
+            t > 0.0 && t <= 1e-3,
+            "must be in (0, 1e-3]",
+        )?;
+        let l = self.lyapunov_periods;
+        check("lyapunov_periods", f64::from(l), l >= 1, "must be >= 1")?;
+        Ok(*self)
     }
 }
 

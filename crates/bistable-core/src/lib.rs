@@ -19,6 +19,7 @@ pub mod audit;
 mod chatter;
 pub mod checkpoint;
 pub mod classify;
+pub mod codec;
 pub mod events;
 pub mod params;
 pub mod potential;

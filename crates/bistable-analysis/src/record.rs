@@ -1,0 +1,133 @@
+//! The record of one classified point: the keys and values that `bistable classify` prints as
+//! JSON, `bistable map` writes as a CSV row and the Python package returns as a dict. The single
+//! definition of those names, their order and their values; formatting is the callers' part.
+
+use crate::sweep::Classified;
+
+/// Names of the [`Record`] fields, in order: the JSON keys and the map CSV columns.
+pub const COLUMNS: [&str; 16] = [
+    "omega",
+    "velocity",
+    "zeta",
+    "restitution",
+    "class",
+    "period",
+    "chaotic",
+    "lyapunov",
+    "snap_throughs",
+    "final_well",
+    "at_rest_in_second_well",
+    "impacts_per_period",
+    "sticking",
+    "periods_simulated",
+    "stopped_early",
+    "wall_time_s",
+];
+
+/// One value of a [`Record`].
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub enum Value<'a> {
+    /// A real number.
+    F(f64),
+    /// A count.
+    I(u64),
+    /// A flag.
+    Bool(bool),
+    /// A name.
+    S(&'a str),
+    /// No value (JSON `null`, an empty CSV field).
+    Null,
+}
+
+/// One classified point (see [`COLUMNS`]); units are the model's (nondimensional).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Record {
+    /// `Ω`.
+    pub omega: f64,
+    /// `V`.
+    pub velocity: f64,
+    /// `ζ`.
+    pub zeta: f64,
+    /// `e`.
+    pub restitution: f64,
+    /// `intrawell`, `transient_interwell` or `continuous_interwell`.
+    pub class: String,
+    /// Steady-state period in shaker periods; `None` when aperiodic.
+    pub period: Option<u32>,
+    /// Aperiodic with a positive largest Lyapunov exponent.
+    pub chaotic: bool,
+    /// Largest Lyapunov exponent (per unit of τ) of an aperiodic response.
+    pub lyapunov: Option<f64>,
+    /// Barrier crossings over the whole run.
+    pub snap_throughs: u64,
+    /// 1 or 2.
+    pub final_well: u8,
+    /// Converged to rest at the second equilibrium.
+    pub at_rest_in_second_well: bool,
+    /// Impacts per steady-state period.
+    pub impacts_per_period: Option<u64>,
+    /// The steady state includes sticking.
+    pub sticking: bool,
+    /// Natural periods simulated.
+    pub periods_simulated: f64,
+    /// Stopped before the full length.
+    pub stopped_early: bool,
+    /// Wall-clock time of this point (s).
+    pub wall_time_s: f64,
+}
+
+/// The three class names a [`Record`] may hold.
+pub const CLASSES: [&str; 3] = ["intrawell", "transient_interwell", "continuous_interwell"];
+
+impl Record {
+    /// The record of a classified point.
+    pub fn new(point: &Classified) -> Self {
+        let (m, c) = (&point.model, &point.classification);
+        Self {
+            omega: m.omega(),
+            velocity: m.velocity(),
+            zeta: m.params.zeta(),
+            restitution: m.restitution(),
+            class: c.class.name().to_string(),
+            period: c.period,
+            chaotic: c.chaotic,
+            lyapunov: c.lyapunov,
+            snap_throughs: c.snap_throughs,
+            final_well: c.final_well.number(),
+            at_rest_in_second_well: c.at_rest_in_second_well,
+            impacts_per_period: c.impacts_per_period,
+            sticking: c.sticking,
+            periods_simulated: c.periods_simulated,
+            stopped_early: c.stopped_early,
+            wall_time_s: point.wall_time_s,
+        }
+    }
+
+    /// The values in the order of [`COLUMNS`].
+    pub fn values(&self) -> [Value<'_>; 16] {
+        let opt_i = |v: Option<u64>| v.map_or(Value::Null, Value::I);
+        [
+            Value::F(self.omega),
+            Value::F(self.velocity),
+            Value::F(self.zeta),
+            Value::F(self.restitution),
+            Value::S(&self.class),
+            opt_i(self.period.map(u64::from)),
+            Value::Bool(self.chaotic),
+            self.lyapunov.map_or(Value::Null, Value::F),
+            Value::I(self.snap_throughs),
+            Value::I(u64::from(self.final_well)),
+            Value::Bool(self.at_rest_in_second_well),
+            opt_i(self.impacts_per_period),
+            Value::Bool(self.sticking),
+            Value::F(self.periods_simulated),
+            Value::Bool(self.stopped_early),
+            Value::F(self.wall_time_s),
+        ]
+    }
+
+    /// `(name, value)` pairs in order.
+    pub fn pairs(&self) -> impl Iterator<Item = (&'static str, Value<'_>)> {
+        COLUMNS.into_iter().zip(self.values())
+    }
+}

@@ -1,0 +1,206 @@
+"""bistable_impact: a mass on a bistable (double-well) spring driven only by impacts with a
+sinusoidally vibrating shaker plate (Nonlinear Dynamics 2022, doi 10.1007/s11071-022-07793-w).
+
+Python adapter over the project's Rust crates (``bistable-core``: model and event-driven
+integrator; ``bistable-analysis``: the paper's analyses). All quantities are nondimensional as in
+the paper: time ``τ = ω0·t`` (one linear natural period is ``2π``), lengths in units of the well
+distance ``Δx`` (wells at 0 and 1, barrier at 1/2), velocities in ``ω0·Δx``, energies in
+``k0·Δx²``; phases are shaker phases in cycles, ``[0, 1)``.
+
+Bad arguments raise ``ValueError`` (or ``TypeError`` for a wrong type) naming the argument, with
+the CLI's rule text; a failed simulation raises ``RuntimeError``. Computations release the GIL.
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Iterator, List, Mapping, Optional
+
+import numpy as np
+
+from . import _native
+from ._native import Simulator
+
+__all__ = [
+    "simulate",
+    "classify",
+    "thresholds",
+    "Simulator",
+    "SimulationResult",
+    "Table",
+    "IMPACT_COLUMNS",
+    "sweep",
+]
+
+#: Columns of :attr:`SimulationResult.impacts` (the CLI's impacts CSV header).
+IMPACT_COLUMNS = ("index", "t", "phase", "x", "v_before", "v_after", "delta_k")
+
+
+class Table(Mapping[str, np.ndarray]):
+    """Named numpy columns of equal length (``table['t']``), in a fixed column order.
+
+    ``len(table)`` is the number of rows; ``table.columns`` the names; ``to_pandas()`` a
+    DataFrame (needs pandas).
+    """
+
+    def __init__(self, columns: List[tuple]):
+        self._cols: Dict[str, np.ndarray] = {}
+        for name, dtype, data in columns:
+            self._cols[name] = np.frombuffer(data, dtype="<" + dtype).copy()
+
+    @property
+    def columns(self) -> List[str]:
+        return list(self._cols)
+
+    def __getitem__(self, name: str) -> np.ndarray:
+        return self._cols[name]
+
+    def __iter__(self) -> Iterator[str]:
+        return iter(self._cols)
+
+    def __len__(self) -> int:
+        first = next(iter(self._cols.values()), None)
+        return 0 if first is None else len(first)
+
+    def to_pandas(self):
+        import pandas as pd
+
+        return pd.DataFrame(self._cols)
+
+    def __repr__(self) -> str:
+        return f"Table({len(self)} rows: {', '.join(self._cols)})"
+
+
+class SimulationResult:
+    """What :func:`simulate` returns.
+
+    Attributes:
+        impacts: :class:`Table` with ``index, t, phase, x, v_before, v_after, delta_k``, one row
+            per impact in time order (index 0 is the impact at ``τ = 0``); ``t`` time units,
+            ``phase`` shaker cycles ``[0, 1)``, ``x`` position of mass and plate (``Δx``),
+            velocities ``ω0·Δx`` (``v_after = −e·v_before + (1+e)·ż``), ``delta_k`` the kinetic
+            energy change ``½(v_after² − v_before²)`` (``k0·Δx²``).
+        sticking: :class:`Table` ``start, end, x_start, x_end`` per sticking interval (the mass
+            rides on the plate); an interval still open at the end has ``end = x_end = NaN``.
+        snaps: :class:`Table` ``t, v, to_well`` per crossing of the barrier ``x = 1/2``
+            (``to_well`` 1: ``x < 1/2``, 2: ``x > 1/2``).
+        trace: :class:`Table` ``t, x, v, z, zdot`` sampled at ``τ = k·trace_dt`` from the dense
+            output, or ``None`` without ``trace_dt``.
+        final_state: dict ``t, x, v, z, zdot, mode ('free'|'sticking'), well, kinetic_energy,
+            potential_energy`` at the end.
+        summary: dict of the run (the CLI's ``simulate --json`` keys that apply, plus
+            ``started_at``/``finished_at``: Unix time in s of the computation).
+    """
+
+    def __init__(self, raw: Dict[str, Any]):
+        self.impacts = Table(raw["impacts"])
+        self.sticking = Table(raw["sticking"])
+        self.snaps = Table(raw["snaps"])
+        self.trace = None if raw["trace"] is None else Table(raw["trace"])
+        self.final_state: Dict[str, Any] = raw["final_state"]
+        self.summary: Dict[str, Any] = raw["summary"]
+
+    def __repr__(self) -> str:
+        s = self.summary
+        return (
+            f"SimulationResult(omega={s['omega']}, velocity={s['velocity']}, "
+            f"t_end={s['t_end']}, impacts={len(self.impacts)}, "
+            f"sticking={len(self.sticking)}, snaps={len(self.snaps)})"
+        )
+
+
+def simulate(
+    omega: float,
+    velocity: float,
+    t_end: Optional[float] = None,
+    periods: Optional[float] = None,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    trace_dt: Optional[float] = None,
+) -> SimulationResult:
+    """Simulates from the paper's initial condition (mass at rest at ``x = 0``, ``τ = 0``, where
+    the plate ``z = (V/Ω)·sin(Ωτ)`` meets it moving up: impact 0 at ``τ = 0``).
+
+    Args:
+        omega: shaker frequency ratio ``Ω = Ω̂/ω0`` (> 0).
+        velocity: shaker velocity amplitude ``V = V̂/(ω0·Δx)`` (>= 0).
+        t_end: end time ``τ`` (time units, > 0); exactly one of ``t_end`` and ``periods``.
+        periods: number of natural periods ``N``, i.e. up to ``τ = 2π·N``.
+        zeta: damping ratio ``ζ`` (>= 0).
+        restitution: coefficient of restitution ``e`` in ``[0, 1]``.
+        tol: local error tolerance of the Taylor integrator, in ``[1e-18, 1e-3]``.
+        chatter: ``'accumulation'`` (predicted accumulation point, default) or ``'paper'``
+            (sticking when two impacts are less than ``1e-9`` apart).
+        trace_dt: sampling interval of :attr:`SimulationResult.trace` (time units, > 0).
+    """
+    return SimulationResult(
+        _native.simulate(
+            omega,
+            velocity,
+            t_end=t_end,
+            periods=periods,
+            zeta=zeta,
+            restitution=restitution,
+            tol=tol,
+            chatter=chatter,
+            trace_dt=trace_dt,
+        )
+    )
+
+
+def classify(
+    omega: float,
+    velocity: float,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 20000.0,
+    full: bool = False,
+    max_period: int = 16,
+    period_tol: float = 1e-8,
+    lyapunov_periods: int = 2000,
+) -> Dict[str, Any]:
+    """The response class at ``(Ω, V)`` from the paper's initial condition, as ``bistable
+    classify`` prints it: a dict with the CLI's JSON keys ``omega, velocity, zeta, restitution,
+    class ('intrawell'|'transient_interwell'|'continuous_interwell'), period (shaker periods or
+    None), chaotic, lyapunov (per unit of τ, or None), snap_throughs, final_well (1|2),
+    at_rest_in_second_well, impacts_per_period, sticking, periods_simulated (natural periods),
+    stopped_early, wall_time_s (s)``.
+
+    Args (besides the model's, see :func:`simulate`):
+        max_periods: longest run in natural periods, ``[1, 1e8]``.
+        full: always run ``max_periods`` (no early stop).
+        max_period: largest period looked for, in shaker periods, ``[1, 64]``.
+        period_tol: relative agreement that counts as periodic, ``(0, 1e-3]``.
+        lyapunov_periods: shaker periods averaged for the Lyapunov exponent (>= 1).
+    """
+    return _native.classify(
+        omega,
+        velocity,
+        zeta=zeta,
+        restitution=restitution,
+        tol=tol,
+        chatter=chatter,
+        max_periods=max_periods,
+        full=full,
+        max_period=max_period,
+        period_tol=period_tol,
+        lyapunov_periods=lyapunov_periods,
+    )
+
+
+def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict[str, Any]:
+    """The shaker velocity thresholds of Eq. 16–18 (``V`` in units of ``ω0·Δx``), as
+    ``bistable thresholds --json``: ``restitution``, ``single_impact = 1/(4(1+e))``,
+    ``interwell = (1−e)/(2(1+e))``, ``omega`` and ``quasi_static = Ω/2`` (None without omega).
+
+    Args:
+        restitution: ``e`` in ``[0, 1)``.
+        omega: ``Ω`` (> 0), for the quasi-static threshold.
+    """
+    return _native.thresholds_of(restitution, omega)
+
+
+from . import sweep  # noqa: E402  (uses the functions above)

@@ -1,0 +1,102 @@
+"""Type stubs of the Rust extension module (see the package docstring for units)."""
+
+from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+
+Column = Tuple[str, str, bytes]  # name, numpy dtype without byte order ('f8' | 'i8'), LE data
+Event = Dict[str, Any]
+
+def simulate(
+    omega: float,
+    velocity: float,
+    t_end: Optional[float] = None,
+    periods: Optional[float] = None,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    trace_dt: Optional[float] = None,
+) -> Dict[str, Any]: ...
+def classify(
+    omega: float,
+    velocity: float,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 20000.0,
+    full: bool = False,
+    max_period: int = 16,
+    period_tol: float = 1e-8,
+    lyapunov_periods: int = 2000,
+) -> Dict[str, Any]: ...
+def classify_many(
+    points: List[Tuple[float, float]],
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 20000.0,
+    full: bool = False,
+    max_period: int = 16,
+    period_tol: float = 1e-8,
+    lyapunov_periods: int = 300,
+    threads: int = 0,
+) -> List[Dict[str, Any]]: ...
+def thresholds_of(restitution: float = 0.85, omega: Optional[float] = None) -> Dict[str, Any]: ...
+
+class Simulator:
+    """A stateful simulator of the model (nondimensional units, see the package docstring).
+
+    ``Simulator(omega, velocity, zeta=0.02, restitution=0.85, tol=1e-16,
+    chatter='accumulation', t0=0.0, x0=0.0, v0=0.0)``: the mass at ``x0`` (``Δx``, not below
+    the plate) with velocity ``v0`` (``ω0·Δx``) at time ``t0``; the defaults are the paper's
+    initial condition. Picklable (through :meth:`checkpoint`).
+    """
+
+    def __init__(
+        self,
+        omega: float,
+        velocity: float,
+        zeta: float = 0.02,
+        restitution: float = 0.85,
+        tol: float = 1e-16,
+        chatter: str = "accumulation",
+        t0: float = 0.0,
+        x0: float = 0.0,
+        v0: float = 0.0,
+    ) -> None: ...
+    def advance_to(
+        self, t: float, callback: Optional[Callable[[Event], Any]] = None
+    ) -> Union[List[Event], bool]:
+        """Advances to time ``t`` (>= the current time). Without ``callback``: returns the
+        events on the way as dicts (``kind``: ``'impact'`` with ``index, t, phase, x, v_before,
+        v_after, zdot, delta_k``; ``'stick_start'`` with ``t, x, cause, impacts``;
+        ``'stick_end'`` with ``t, x, v``; ``'snap_through'`` with ``t, v, to_well``). With
+        ``callback``: calls it with each event in time order (the GIL is taken for the call
+        only); returning ``False`` stops the advance at that event, an exception stops it and
+        propagates; returns whether ``t`` was reached."""
+        ...
+    def state(self) -> Dict[str, Any]:
+        """``t, x, v, z, zdot, mode ('free'|'sticking'), well (1|2), kinetic_energy,
+        potential_energy`` now (dense output; observing never changes the run)."""
+        ...
+    @property
+    def time(self) -> float:
+        """Current time ``τ``."""
+        ...
+    def stats(self) -> Dict[str, int]:
+        """Work counters ``steps, impacts, sticks, snap_throughs``."""
+        ...
+    def set_sinusoid(self, omega: float, velocity: float) -> None:
+        """Switches the shaker to ``(omega, velocity)`` now, continuing plate position and
+        phase."""
+        ...
+    def checkpoint(self) -> bytes:
+        """The complete state in a versioned, checksummed byte format; a simulator restored
+        from it continues bit for bit like this one."""
+        ...
+    @staticmethod
+    def from_checkpoint(data: bytes) -> "Simulator":
+        """Restores a simulator; ``ValueError`` for bytes that are not a valid checkpoint."""
+        ...
+    def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
