@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 use bistable_impact_node::args::{self, Config, Parsed};
 use bistable_impact_node::inbox::{take_commands, Taken, Throttle, MAX_COMMANDS_PER_CALL};
 use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, ShakerCommand};
+use bistable_impact_node::names::{Kind, Names};
 use bistable_impact_node::params::{Settings, SPECS};
 use bistable_impact_node::sim::{Outcome, Runner};
 use ros2_client::log::LogLevel;
@@ -55,6 +56,14 @@ const COMMAND_QOS: QosProfile = QosProfile::subscription_default()
         when_full: WhenFull::DEFAULT,
     })
     .history(History::KeepLast { depth: 10000 });
+
+/// The node's topics as named in the code (relative to the node namespace, `/clock`
+/// absolute), resolved with [`Names::resolve`].
+const MASS_STATE: &str = "bistable/mass_state";
+const IMPACTS: &str = "bistable/impacts";
+const SHAKER_COMMAND: &str = "bistable/shaker_command";
+const CLOCK: &str = "/clock";
+const TOPICS: [&str; 4] = [MASS_STATE, IMPACTS, SHAKER_COMMAND, CLOCK];
 
 /// A parameter event from the parameter services (spinner thread) to the simulation loop.
 enum ParamEvent {
@@ -292,8 +301,13 @@ fn err<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> String {
     move |e| format!("cannot create the {what}: {e}")
 }
 
-fn topic_name(ns: &str, name: &str) -> Result<Name, String> {
-    Name::new(ns, name).map_err(|e| format!("bad topic name {ns}/{name}: {e:?}"))
+/// The ros2-client [`Name`] of the topic the node calls `name`, resolved as rcl does (node
+/// namespace, remapping rules); the result is absolute.
+fn topic_name(names: &Names, name: &str) -> Result<Name, String> {
+    let full = names.resolve(name, Kind::Topic)?;
+    let (ns, base) = full.rsplit_once('/').unwrap_or(("", &full));
+    Name::new(if ns.is_empty() { "/" } else { ns }, base)
+        .map_err(|e| format!("topic {name} resolves to {full}, which ros2-client refuses: {e}"))
 }
 
 fn run(cfg: Config) -> Result<(), String> {
@@ -306,8 +320,9 @@ fn run(cfg: Config) -> Result<(), String> {
     let runner = Runner::new(&cfg.settings)?;
     let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
         .map_err(|e| format!("cannot join DDS domain {}: {e}", cfg.domain_id))?;
-    let node_name = NodeName::new(&cfg.namespace, &cfg.node_name)
-        .map_err(|e| format!("bad node name {}/{}: {e:?}", cfg.namespace, cfg.node_name))?;
+    let names = &cfg.names;
+    let node_name = NodeName::new(names.namespace(), names.node())
+        .map_err(|e| format!("bad node name {}: {e}", names.fully_qualified()))?;
 
     let (param_tx, param_rx) = mpsc::channel();
     let mut options = NodeOptions::new()
@@ -342,50 +357,32 @@ fn run(cfg: Config) -> Result<(), String> {
 
     let log = Logger {
         handle: node.logging_handle(),
-        name: cfg.node_name.clone(),
+        name: names.node().to_owned(),
         level: cfg.log_level,
         rosout: cfg.rosout,
         stdout: cfg.stdout,
     };
     let msgs = "bistable_impact_msgs";
-    let create = |node: &mut Node, ns: &str, name: &str, pkg: &str, ty: &str, qos: &QosProfile| {
-        node.create_topic(&topic_name(ns, name)?, MessageTypeName::new(pkg, ty), qos)
-            .map_err(|e| format!("cannot create topic {name}: {e}"))
+    let create = |node: &mut Node, name: &str, pkg: &str, ty: &str, qos: &QosProfile| {
+        node.create_topic(
+            &topic_name(names, name)?,
+            MessageTypeName::new(pkg, ty),
+            qos,
+        )
+        .map_err(|e| format!("cannot create topic {name}: {e}"))
     };
     let state_qos = sample_qos(10);
     let clock_qos = sample_qos(1);
-    let state_topic = create(
-        &mut node,
-        "/bistable",
-        "mass_state",
-        msgs,
-        "MassState",
-        &state_qos,
-    )?;
-    let impact_topic = create(
-        &mut node,
-        "/bistable",
-        "impacts",
-        msgs,
-        "ImpactEvent",
-        &IMPACT_QOS,
-    )?;
+    let state_topic = create(&mut node, MASS_STATE, msgs, "MassState", &state_qos)?;
+    let impact_topic = create(&mut node, IMPACTS, msgs, "ImpactEvent", &IMPACT_QOS)?;
     let command_topic = create(
         &mut node,
-        "/bistable",
-        "shaker_command",
+        SHAKER_COMMAND,
         msgs,
         "ShakerCommand",
         &COMMAND_QOS,
     )?;
-    let clock_topic = create(
-        &mut node,
-        "/",
-        "clock",
-        "rosgraph_msgs",
-        "Clock",
-        &clock_qos,
-    )?;
+    let clock_topic = create(&mut node, CLOCK, "rosgraph_msgs", "Clock", &clock_qos)?;
     let state_pub: Publisher<MassState> = node
         .create_publisher(&state_topic, Some(state_qos.clone()))
         .map_err(err("mass state publisher"))?;
@@ -418,6 +415,16 @@ fn run(cfg: Config) -> Result<(), String> {
             s.frame_id
         ),
     );
+    let resolved: Vec<String> = TOPICS
+        .iter()
+        .map(|t| {
+            format!(
+                "{t} -> {}",
+                names.resolve(t, Kind::Topic).unwrap_or_default()
+            )
+        })
+        .collect();
+    log.log(LogLevel::Info, &format!("topics: {}", resolved.join(", ")));
     for w in &cfg.warnings {
         log.log(LogLevel::Warn, w);
     }
