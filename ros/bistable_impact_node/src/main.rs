@@ -11,7 +11,7 @@ use bistable_impact_node::args::{self, Config, Parsed};
 use bistable_impact_node::inbox::{take_commands, Taken, Throttle, MAX_COMMANDS_PER_CALL};
 use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, ShakerCommand};
 use bistable_impact_node::names::{Kind, Names};
-use bistable_impact_node::params::{Settings, SPECS};
+use bistable_impact_node::params::{Settings, MAX_HISTORY_DEPTH, SPECS};
 use bistable_impact_node::sim::{Outcome, Runner};
 use ros2_client::log::LogLevel;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
@@ -32,21 +32,21 @@ const fn sample_qos(depth: usize) -> QosProfile {
         .history(History::KeepLast { depth })
 }
 
-/// QoS of `/bistable/impacts`: reliable; when the window of unacknowledged samples (8192) is
-/// full the simulation waits for the subscribers instead of dropping an impact. Transient
-/// local: a subscriber that joins late (e.g. after impact 0 at t = 0) first receives the last
-/// [`IMPACT_HISTORY`] impacts.
-const IMPACT_QOS: QosProfile = QosProfile::subscription_default()
-    .reliability(Reliability::Reliable {
-        when_full: WhenFull::Wait(Duration::from_millis(20)),
-    })
-    .durability(Durability::TransientLocal)
-    .history(History::KeepLast {
-        depth: IMPACT_HISTORY,
-    });
-
-/// Impacts kept for late-joining subscribers.
-const IMPACT_HISTORY: usize = 1000;
+/// QoS of `/bistable/impacts`: reliable; when RustDDS's window of unacknowledged samples
+/// (8192) is full the simulation waits for the subscribers instead of dropping an impact.
+/// Transient local with KEEP_LAST `depth` (the `history_depth` parameter, at most 8192 so that
+/// RustDDS's cache cleaning, which keeps the last 8192 + 1, never removes one of them): a
+/// subscriber that joins late (e.g. after impact 0 at t = 0) first receives the last `depth`
+/// impacts (RustDDS patched to offer exactly those, see `ros/patches/README.md`), then the
+/// live stream.
+const fn impact_qos(depth: usize) -> QosProfile {
+    QosProfile::subscription_default()
+        .reliability(Reliability::Reliable {
+            when_full: WhenFull::Wait(Duration::from_millis(20)),
+        })
+        .durability(Durability::TransientLocal)
+        .history(History::KeepLast { depth })
+}
 
 /// QoS of `/bistable/shaker_command`: reliable, keeps the last 10,000 commands not yet taken
 /// (at ~46,000 commands/s from two publishers on two cores the loop was at times starved of
@@ -374,7 +374,9 @@ fn run(cfg: Config) -> Result<(), String> {
     let state_qos = sample_qos(10);
     let clock_qos = sample_qos(1);
     let state_topic = create(&mut node, MASS_STATE, msgs, "MassState", &state_qos)?;
-    let impact_topic = create(&mut node, IMPACTS, msgs, "ImpactEvent", &IMPACT_QOS)?;
+    // In range by the parameter check (1..=8192).
+    let impact_qos = impact_qos(cfg.settings.history_depth.clamp(1, MAX_HISTORY_DEPTH) as usize);
+    let impact_topic = create(&mut node, IMPACTS, msgs, "ImpactEvent", &impact_qos)?;
     let command_topic = create(
         &mut node,
         SHAKER_COMMAND,
@@ -387,7 +389,7 @@ fn run(cfg: Config) -> Result<(), String> {
         .create_publisher(&state_topic, Some(state_qos.clone()))
         .map_err(err("mass state publisher"))?;
     let impact_pub: Publisher<ImpactEvent> = node
-        .create_publisher(&impact_topic, Some(IMPACT_QOS))
+        .create_publisher(&impact_topic, Some(impact_qos))
         .map_err(err("impact publisher"))?;
     let clock_pub: Publisher<Clock> = node
         .create_publisher(&clock_topic, Some(clock_qos))
@@ -401,7 +403,7 @@ fn run(cfg: Config) -> Result<(), String> {
         LogLevel::Info,
         &format!(
             "started {} in DDS domain {}: zeta = {}, e = {}, omega0 = {} rad/s, delta_x = {} m, \
-             Omega = {}, V = {}, publish_rate = {} Hz, real_time_factor = {}, frame_id = '{}'",
+             Omega = {}, V = {}, publish_rate = {} Hz, real_time_factor = {}, frame_id = '{}', history_depth = {}",
             node.fully_qualified_name(),
             cfg.domain_id,
             s.zeta,
@@ -412,7 +414,8 @@ fn run(cfg: Config) -> Result<(), String> {
             s.v,
             s.publish_rate,
             s.real_time_factor,
-            s.frame_id
+            s.frame_id,
+            s.history_depth
         ),
     );
     let resolved: Vec<String> = TOPICS

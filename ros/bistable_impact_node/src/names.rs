@@ -95,10 +95,7 @@ impl Remap {
                 }
             }
         };
-        Ok(Self {
-            node,
-            rule,
-        })
+        Ok(Self { node, rule })
     }
 
     fn applies_to(&self, node: &str) -> bool {
