@@ -20,6 +20,7 @@
 //! [`PlateMotion::continued_by_sinusoid`] (position continuous, velocity jumps, centre moves),
 //! any sequence of set-points leaves the plate centred on `c`.
 
+use crate::events::{Event, Impact};
 use crate::params::{check, ParamError};
 use crate::shaker::{PlateMotion, PolyPiece, Sinusoid};
 use crate::simulator::{SimError, Simulator};
@@ -115,6 +116,24 @@ impl SetpointRamp {
         Ok(matches!(sim.plate(), PlateMotion::Poly(_)))
     }
 
+    /// Runs `sim` (on this ramp since [`Self::start`]) to the end of the ramp, following its
+    /// pieces, and returns the events; impacts on the pieces carry the ramp's phase.
+    pub fn events_through(&self, sim: &mut Simulator) -> Result<Vec<Event>, SimError> {
+        let mut events = Vec::new();
+        while self.follow(sim)? {
+            let Some(end) = sim.plate().horizon() else {
+                break;
+            };
+            for mut e in sim.events_until(end.to_f64())? {
+                if let Event::Impact(i) = &mut e {
+                    i.phase = self.impact_phase(i);
+                }
+                events.push(e);
+            }
+        }
+        Ok(events)
+    }
+
     /// The instant the ramp started.
     pub fn start_instant(&self) -> Instant {
         self.start
@@ -134,6 +153,14 @@ impl SetpointRamp {
     /// Shaker phase in cycles, `[0, 1)`, at `t` (the ramp runs at the target's phase).
     pub fn phase_cycles(&self, t: Instant) -> f64 {
         self.target.phase_cycles(t)
+    }
+
+    /// The shaker phase [cycles] of an impact: the core's (the plate was a sinusoid) or, for
+    /// an impact on the ramp's pieces (the core gives none), the ramp's.
+    pub fn impact_phase(&self, i: &Impact) -> Option<f64> {
+        let on_ramp = i.t >= self.start.to_f64() && i.t <= self.knot(self.pieces);
+        i.phase
+            .or_else(|| on_ramp.then(|| self.phase_cycles(Instant::new(i.t))))
     }
 
     /// Knot `k` as a plain double, so that a simulation advanced to a piece's end (a double)
