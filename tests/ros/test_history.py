@@ -34,6 +34,8 @@ class Sub:
         self.sub = peer.node.create_subscription(ImpactEvent, "/bistable/impacts", self.take, keep_all_impacts())
 
     def take(self, m):
+        if not self.indices:
+            self.first_wall = time.monotonic()
         self.indices.append(m.index)
 
 
@@ -64,22 +66,24 @@ def test_late_joiners_get_exactly_the_last_n_impacts_then_the_live_stream():
         assert peer.spin_until(lambda: len(observer.indices) > 2 * DEPTH, 20), len(observer.indices)
         # Joiners at random instants while the impacts stream, each subscribed for a second (one
         # at a time, so that the Python peer keeps up).
-        start, start_count = time.monotonic(), len(observer.indices)
         for _ in range(3):
             peer.spin_for(rng.uniform(0.2, 0.8))
             joiner = Sub(peer)
             joiners.append((joiner, observer.indices[-1]))
             peer.spin_until(lambda: len(joiner.indices) >= DEPTH + 1000, 10)
             peer.node.destroy_subscription(joiner.sub)
-        rate = (len(observer.indices) - start_count) / (time.monotonic() - start)
         # Freeze: pace the simulation at 1e-9 simulated seconds per wall second (the next
         # state, 100 s of simulation time ahead, is due in 3,000 years).
         set_rtf(1e-9)
+        paused_at = time.monotonic()  # after the node has the new value: a lower bound on the rate
         last = -1
         while len(observer.indices) != last:
             last = len(observer.indices)
             peer.spin_for(0.5)
         frozen = len(observer.indices)
+        # The node's rate: what it published up to the pause (the observer may lag behind; it
+        # got impact 0 right at the start).
+        rate = frozen / (paused_at - observer.first_wall)
         assert observer.indices == list(range(frozen))
         late = Sub(peer)
         assert peer.spin_until(lambda: len(late.indices) >= DEPTH, 10), len(late.indices)
