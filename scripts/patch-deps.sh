@@ -1,19 +1,20 @@
 #!/usr/bin/env bash
 # Patched dependencies (used through [patch.crates-io] in the top-level Cargo.toml): downloads
 # the published crate from crates.io, checks it against the checksum below, unpacks it into
-# .deps/ and applies our patch from ros/patches/. Nothing of the dependency is committed here;
-# only the patch is. Safe to run repeatedly: does nothing when the patched tree is current.
+# .deps/ and applies our patches from ros/patches/ in order. Nothing of the dependency is
+# committed here; only the patches are. Safe to run repeatedly: does nothing when the patched tree is current.
 set -euo pipefail
 cd "$(dirname "$0")/.."
 
-patch_crate() { # name version sha256 patch-file
-  local name=$1 version=$2 sum=$3 patchfile=$4
+patch_crate() { # name version sha256 patch-file...
+  local name=$1 version=$2 sum=$3
+  shift 3
   local dest=.deps/$name stamp=.deps/$name.stamp
-  local want="$name $version $sum $(sha256sum "$patchfile" | cut -d' ' -f1)"
+  local want="$name $version $sum $(cat "$@" | sha256sum | cut -d' ' -f1)"
   if [ -f "$dest/Cargo.toml" ] && [ "$(cat "$stamp" 2>/dev/null)" = "$want" ]; then
     return
   fi
-  echo "setup: $name $version from crates.io with $patchfile"
+  echo "setup: $name $version from crates.io with $*"
   local tmp
   tmp=$(mktemp -d)
   local cached
@@ -27,12 +28,17 @@ patch_crate() { # name version sha256 patch-file
   rm -rf "$dest" && mkdir -p .deps
   tar xzf "$tmp/crate.tar.gz" -C "$tmp"
   mv "$tmp/$name-$version" "$dest"
-  patch -s -p1 -d "$dest" < "$patchfile"
+  local patchfile
+  for patchfile in "$@"; do
+    patch -s -p1 -d "$dest" < "$patchfile"
+  done
   rm -rf "$tmp"
   echo "$want" > "$stamp"
 }
 
-# rustdds (the DDS layer under ros2-client): a DATA that cannot become a sample no longer
-# stalls a reliable reader (ros/patches/README.md).
+# rustdds (the DDS layer under ros2-client), ros/patches/README.md: a DATA that cannot become a
+# sample no longer stalls a reliable reader; a transient-local KEEP_LAST writer offers a
+# late-joining reader exactly its last `depth` samples.
 patch_crate rustdds 0.15.1 42683a88b9dc025d7d45771b88d20846443b4901ec4b045ca78b8dd316ab616f \
-  ros/patches/rustdds-0.15.1-irrelevant-undecodable-data.patch
+  ros/patches/rustdds-0.15.1-irrelevant-undecodable-data.patch \
+  ros/patches/rustdds-0.15.1-transient-local-history.patch

@@ -28,14 +28,17 @@ def run(*args, domain=None):
 def test_help_and_refused_command_lines():
     r = run("--help")
     assert r.returncode == 0
-    for name in ["zeta", "omega0", "delta_x", "Omega", "V", "publish_rate", "real_time_factor", "frame_id"]:
+    for name in ["zeta", "omega0", "delta_x", "Omega", "V", "publish_rate", "real_time_factor", "frame_id",
+                 "history_depth", "__ns:="]:
         assert name in r.stdout
     for args, domain, reason in [
         (["--ros-args", "-p", "zeta:=-1"], None, "invalid zeta"),
         (["--ros-args", "-p", "e:=.nan"], None, "invalid e"),
         (["--ros-args", "-p", "publish_rate:=.inf"], None, "invalid publish_rate"),
         (["--ros-args", "--params-file", "/nonexistent.yaml"], None, "--params-file"),
-        (["--ros-args", "-r", "/bistable/impacts:=/x"], None, "unsupported remapping"),
+        (["--ros-args", "-r", "/bistable/impacts:=/x y"], None, "invalid remapping rule"),
+        (["--ros-args", "-p", "history_depth:=0"], None, "invalid history_depth"),
+        (["--ros-args", "-p", "history_depth:=8193"], None, "invalid history_depth"),
         ([], "999", "ROS_DOMAIN_ID"),
     ]:
         r = run(*args, domain=domain)

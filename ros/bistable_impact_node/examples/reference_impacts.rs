@@ -1,9 +1,12 @@
 //! Reference impact list straight from `bistable-core` (no node code), for the interop tests:
 //! `reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2]` prints
 //! `index,t,phase,x,v_before,v_after,zdot,delta_k,ended_in_sticking` (nondimensional, ζ = 0.02,
-//! e = 0.85, the paper's initial condition), switching the shaker at `T_SWITCH` if given.
+//! e = 0.85, the paper's initial condition), switching the shaker at `T_SWITCH` if given, as
+//! the node does: a `SetpointRamp` of `RAMP_CYCLES` periods about the initial centre (impacts
+//! on the ramp get the ramp's phase).
 
-use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
+use bistable_core::{Event, Params, SetpointRamp, Simulator, Sinusoid, SolverOptions};
+use bistable_impact_node::sim::RAMP_CYCLES;
 
 fn main() -> Result<(), String> {
     let args: Vec<f64> = std::env::args()
@@ -21,7 +24,9 @@ fn main() -> Result<(), String> {
     let mut events = Vec::new();
     if let Some((ts, o2, v2)) = switch {
         events.extend(sim.events_until(ts).map_err(|e| e.to_string())?);
-        sim.set_sinusoid(o2, v2).map_err(|e| e.to_string())?;
+        let ramp =
+            SetpointRamp::start(&mut sim, 0.0, o2, v2, RAMP_CYCLES).map_err(|e| e.to_string())?;
+        events.extend(ramp.events_through(&mut sim).map_err(|e| e.to_string())?);
     }
     events.extend(sim.events_until(t_end).map_err(|e| e.to_string())?);
     println!("index,t,phase,x,v_before,v_after,zdot,delta_k,ended_in_sticking");

@@ -1,6 +1,7 @@
 """Starts bistable_impact_node as node `bistable_impact` with a parameter file (default: the
-package's config/bistable_impact.yaml), e.g.
-`ros2 launch bistable_impact_node bistable_impact.launch.py params_file:=my.yaml`."""
+package's config/bistable_impact.yaml) in a namespace (default: the root; its topics are
+relative to it), e.g.
+`ros2 launch bistable_impact_node bistable_impact.launch.py params_file:=my.yaml namespace:=/rig1`."""
 import os
 
 from ament_index_python.packages import get_package_share_directory
@@ -15,10 +16,12 @@ def generate_launch_description():
     return LaunchDescription(
         [
             DeclareLaunchArgument("params_file", default_value=default, description="parameter YAML file"),
+            DeclareLaunchArgument("namespace", default_value="", description="node namespace, e.g. /rig1"),
             Node(
                 package="bistable_impact_node",
                 executable="bistable_impact_node",
                 name="bistable_impact",
+                namespace=LaunchConfiguration("namespace"),
                 output="screen",
                 parameters=[LaunchConfiguration("params_file")],
             ),

@@ -1,9 +1,14 @@
 //! Command line and environment: the ROS 2 conventions `--ros-args -p name:=value
-//! --params-file FILE -r __node:=NAME -r __ns:=/NS --log-level LEVEL`, and `ROS_DOMAIN_ID`.
+//! --params-file FILE -r [node:]from:=to --log-level LEVEL` (remapping as in rcl, see
+//! [`crate::names`]), and `ROS_DOMAIN_ID`.
 
 use yaml_rust2::Yaml;
 
+use crate::names::{Names, Remap};
 use crate::params::{self, Settings};
+
+/// The node's name in the code (before `__node` remapping).
+pub const NODE_NAME: &str = "bistable_impact";
 
 /// Largest DDS domain id whose RTPS ports fit in 16 bits (`7400 + 250·id + 11 < 65536`).
 pub const MAX_DOMAIN_ID: u16 = 232;
@@ -24,10 +29,8 @@ pub struct Config {
     pub settings: Settings,
     /// `use_sim_time` if given.
     pub use_sim_time: Option<bool>,
-    /// Node name (default `bistable_impact`).
-    pub node_name: String,
-    /// Node namespace (default `/`).
-    pub namespace: String,
+    /// Node name, namespace and remapping rules (default `/bistable_impact`, no rules).
+    pub names: Names,
     /// DDS domain from `ROS_DOMAIN_ID` (default 0).
     pub domain_id: u16,
     /// Lowest severity logged.
@@ -52,8 +55,10 @@ pub enum Parsed {
 /// Usage text.
 pub const USAGE: &str = "\
 usage: bistable_impact_node [--help] [--ros-args [-p NAME:=VALUE]... [--params-file FILE]...
-                            [-r __node:=NAME] [-r __ns:=/NAMESPACE] [--log-level LEVEL]
+                            [-r [NODE:]FROM:=TO]... [--log-level LEVEL]
                             [--disable-rosout-logs] [--disable-stdout-logs] [--]]
+Remapping as in rcl: -r __node:=NAME, -r __ns:=/NAMESPACE, -r bistable/impacts:=hits,
+-r /clock:=clock (relative names resolve in the node's namespace, ~ is the node).
 Environment: ROS_DOMAIN_ID (0..=232, default 0).
 Parameters (units; start-up only ones are fixed once the node runs):";
 
@@ -64,8 +69,7 @@ pub fn parse(
     domain_env: Option<&str>,
     read_file: impl Fn(&str) -> Result<String, String>,
 ) -> Result<Parsed, String> {
-    let mut node_name = "bistable_impact".to_owned();
-    let mut namespace = "/".to_owned();
+    let mut rules = Vec::new();
     let mut files = Vec::new();
     let mut assigns = Vec::new();
     let mut log_level = 20;
@@ -92,19 +96,7 @@ pub fn parse(
             "--ros-args" => {}
             "-p" | "--param" => assigns.push(params::parse_assignment(&value("NAME:=VALUE")?)?),
             "--params-file" => files.push(value("a file name")?),
-            "-r" | "--remap" => {
-                let rule = value("a remapping rule")?;
-                match rule.split_once(":=") {
-                    Some(("__node" | "__name", name)) => name.clone_into(&mut node_name),
-                    Some(("__ns", ns)) => ns.clone_into(&mut namespace),
-                    _ => {
-                        return Err(format!(
-                            "unsupported remapping '{rule}': only __node:= and __ns:= (the topic \
-                             names are fixed)"
-                        ))
-                    }
-                }
-            }
+            "-r" | "--remap" => rules.push(Remap::parse(&value("a remapping rule")?)?),
             "--log-level" => {
                 let level = value("a level")?;
                 let name = level.rsplit(":=").next().unwrap_or(&level).to_lowercase();
@@ -122,14 +114,8 @@ pub fn parse(
             other => return Err(format!("unsupported ROS argument '{other}'")),
         }
     }
-    if !namespace.starts_with('/') {
-        namespace.insert(0, '/');
-    }
-    let fully_qualified = if namespace == "/" {
-        format!("/{node_name}")
-    } else {
-        format!("{namespace}/{node_name}")
-    };
+    let names = Names::new(NODE_NAME, "/", rules)?;
+    let fully_qualified = names.fully_qualified();
     let mut sources: Vec<(String, String, Yaml)> = Vec::new();
     for f in &files {
         let text = read_file(f).map_err(|e| format!("--params-file {f}: {e}"))?;
@@ -177,8 +163,7 @@ pub fn parse(
     Ok(Parsed::Run(Box::new(Config {
         settings,
         use_sim_time,
-        node_name,
-        namespace,
+        names,
         domain_id,
         log_level,
         rosout,
@@ -209,8 +194,8 @@ mod tests {
     fn defaults_files_then_overrides() {
         let c = run(&[], None).unwrap();
         assert_eq!(
-            (c.settings, c.domain_id, c.node_name.as_str()),
-            (Settings::default(), 0, "bistable_impact")
+            (c.settings, c.domain_id, c.names.fully_qualified().as_str()),
+            (Settings::default(), 0, "/bistable_impact")
         );
         let c = run(
             &[
@@ -223,8 +208,10 @@ mod tests {
                 "use_sim_time:=true",
                 "-r",
                 "__node:=shaker1",
+                "--remap",
+                "__ns:=/lab",
                 "-r",
-                "__ns:=lab",
+                "bistable/impacts:=~/hits",
                 "--log-level",
                 "WARN",
             ],
@@ -233,9 +220,12 @@ mod tests {
         .unwrap();
         assert_eq!((c.settings.zeta, c.settings.e), (0.03, 0.9));
         assert_eq!(c.use_sim_time, Some(true));
+        assert_eq!(c.names.fully_qualified(), "/lab/shaker1");
         assert_eq!(
-            (c.node_name.as_str(), c.namespace.as_str()),
-            ("shaker1", "/lab")
+            c.names
+                .resolve("bistable/impacts", crate::names::Kind::Topic)
+                .unwrap(),
+            "/lab/shaker1/hits"
         );
         assert_eq!((c.domain_id, c.log_level), (42, 30));
         assert_eq!(c.warnings.len(), 1, "{:?}", c.warnings);
@@ -260,10 +250,16 @@ mod tests {
                 "no such file",
             ),
             (
-                &["--ros-args", "-r", "/bistable/impacts:=/x"][..],
+                &["--ros-args", "-r", "/bistable/impacts:=/x y"][..],
                 None,
-                "unsupported remapping",
+                "invalid remapping rule '/bistable/impacts:=/x y'",
             ),
+            (
+                &["--ros-args", "-r", "__ns:=lab"][..],
+                None,
+                "must be absolute",
+            ),
+            (&["--ros-args", "-r"][..], None, "needs a remapping rule"),
             (
                 &["--ros-args", "--log-level", "loud"][..],
                 None,

@@ -5,5 +5,6 @@
 pub mod args;
 pub mod inbox;
 pub mod msg;
+pub mod names;
 pub mod params;
 pub mod sim;

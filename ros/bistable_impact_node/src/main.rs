@@ -10,7 +10,8 @@ use std::time::{Duration, Instant};
 use bistable_impact_node::args::{self, Config, Parsed};
 use bistable_impact_node::inbox::{take_commands, Taken, Throttle, MAX_COMMANDS_PER_CALL};
 use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, ShakerCommand};
-use bistable_impact_node::params::{Settings, SPECS};
+use bistable_impact_node::names::{Kind, Names};
+use bistable_impact_node::params::{Settings, MAX_HISTORY_DEPTH, SPECS};
 use bistable_impact_node::sim::{Outcome, Runner};
 use ros2_client::log::LogLevel;
 use ros2_client::qos::{Durability, History, Reliability, WhenFull};
@@ -31,21 +32,21 @@ const fn sample_qos(depth: usize) -> QosProfile {
         .history(History::KeepLast { depth })
 }
 
-/// QoS of `/bistable/impacts`: reliable; when the window of unacknowledged samples (8192) is
-/// full the simulation waits for the subscribers instead of dropping an impact. Transient
-/// local: a subscriber that joins late (e.g. after impact 0 at t = 0) first receives the last
-/// [`IMPACT_HISTORY`] impacts.
-const IMPACT_QOS: QosProfile = QosProfile::subscription_default()
-    .reliability(Reliability::Reliable {
-        when_full: WhenFull::Wait(Duration::from_millis(20)),
-    })
-    .durability(Durability::TransientLocal)
-    .history(History::KeepLast {
-        depth: IMPACT_HISTORY,
-    });
-
-/// Impacts kept for late-joining subscribers.
-const IMPACT_HISTORY: usize = 1000;
+/// QoS of `/bistable/impacts`: reliable; when RustDDS's window of unacknowledged samples
+/// (8192) is full the simulation waits for the subscribers instead of dropping an impact.
+/// Transient local with KEEP_LAST `depth` (the `history_depth` parameter, at most 8192 so that
+/// RustDDS's cache cleaning, which keeps the last 8192 + 1, never removes one of them): a
+/// subscriber that joins late (e.g. after impact 0 at t = 0) first receives the last `depth`
+/// impacts (RustDDS patched to offer exactly those, see `ros/patches/README.md`), then the
+/// live stream.
+const fn impact_qos(depth: usize) -> QosProfile {
+    QosProfile::subscription_default()
+        .reliability(Reliability::Reliable {
+            when_full: WhenFull::Wait(Duration::from_millis(20)),
+        })
+        .durability(Durability::TransientLocal)
+        .history(History::KeepLast { depth })
+}
 
 /// QoS of `/bistable/shaker_command`: reliable, keeps the last 10,000 commands not yet taken
 /// (at ~46,000 commands/s from two publishers on two cores the loop was at times starved of
@@ -55,6 +56,14 @@ const COMMAND_QOS: QosProfile = QosProfile::subscription_default()
         when_full: WhenFull::DEFAULT,
     })
     .history(History::KeepLast { depth: 10000 });
+
+/// The node's topics as named in the code (relative to the node namespace, `/clock`
+/// absolute), resolved with [`Names::resolve`].
+const MASS_STATE: &str = "bistable/mass_state";
+const IMPACTS: &str = "bistable/impacts";
+const SHAKER_COMMAND: &str = "bistable/shaker_command";
+const CLOCK: &str = "/clock";
+const TOPICS: [&str; 4] = [MASS_STATE, IMPACTS, SHAKER_COMMAND, CLOCK];
 
 /// A parameter event from the parameter services (spinner thread) to the simulation loop.
 enum ParamEvent {
@@ -292,8 +301,13 @@ fn err<E: std::fmt::Display>(what: &'static str) -> impl Fn(E) -> String {
     move |e| format!("cannot create the {what}: {e}")
 }
 
-fn topic_name(ns: &str, name: &str) -> Result<Name, String> {
-    Name::new(ns, name).map_err(|e| format!("bad topic name {ns}/{name}: {e:?}"))
+/// The ros2-client [`Name`] of the topic the node calls `name`, resolved as rcl does (node
+/// namespace, remapping rules); the result is absolute.
+fn topic_name(names: &Names, name: &str) -> Result<Name, String> {
+    let full = names.resolve(name, Kind::Topic)?;
+    let (ns, base) = full.rsplit_once('/').unwrap_or(("", &full));
+    Name::new(if ns.is_empty() { "/" } else { ns }, base)
+        .map_err(|e| format!("topic {name} resolves to {full}, which ros2-client refuses: {e}"))
 }
 
 fn run(cfg: Config) -> Result<(), String> {
@@ -306,8 +320,9 @@ fn run(cfg: Config) -> Result<(), String> {
     let runner = Runner::new(&cfg.settings)?;
     let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
         .map_err(|e| format!("cannot join DDS domain {}: {e}", cfg.domain_id))?;
-    let node_name = NodeName::new(&cfg.namespace, &cfg.node_name)
-        .map_err(|e| format!("bad node name {}/{}: {e:?}", cfg.namespace, cfg.node_name))?;
+    let names = &cfg.names;
+    let node_name = NodeName::new(names.namespace(), names.node())
+        .map_err(|e| format!("bad node name {}: {e}", names.fully_qualified()))?;
 
     let (param_tx, param_rx) = mpsc::channel();
     let mut options = NodeOptions::new()
@@ -342,55 +357,39 @@ fn run(cfg: Config) -> Result<(), String> {
 
     let log = Logger {
         handle: node.logging_handle(),
-        name: cfg.node_name.clone(),
+        name: names.node().to_owned(),
         level: cfg.log_level,
         rosout: cfg.rosout,
         stdout: cfg.stdout,
     };
     let msgs = "bistable_impact_msgs";
-    let create = |node: &mut Node, ns: &str, name: &str, pkg: &str, ty: &str, qos: &QosProfile| {
-        node.create_topic(&topic_name(ns, name)?, MessageTypeName::new(pkg, ty), qos)
-            .map_err(|e| format!("cannot create topic {name}: {e}"))
+    let create = |node: &mut Node, name: &str, pkg: &str, ty: &str, qos: &QosProfile| {
+        node.create_topic(
+            &topic_name(names, name)?,
+            MessageTypeName::new(pkg, ty),
+            qos,
+        )
+        .map_err(|e| format!("cannot create topic {name}: {e}"))
     };
     let state_qos = sample_qos(10);
     let clock_qos = sample_qos(1);
-    let state_topic = create(
-        &mut node,
-        "/bistable",
-        "mass_state",
-        msgs,
-        "MassState",
-        &state_qos,
-    )?;
-    let impact_topic = create(
-        &mut node,
-        "/bistable",
-        "impacts",
-        msgs,
-        "ImpactEvent",
-        &IMPACT_QOS,
-    )?;
+    let state_topic = create(&mut node, MASS_STATE, msgs, "MassState", &state_qos)?;
+    // In range by the parameter check (1..=8192).
+    let impact_qos = impact_qos(cfg.settings.history_depth.clamp(1, MAX_HISTORY_DEPTH) as usize);
+    let impact_topic = create(&mut node, IMPACTS, msgs, "ImpactEvent", &impact_qos)?;
     let command_topic = create(
         &mut node,
-        "/bistable",
-        "shaker_command",
+        SHAKER_COMMAND,
         msgs,
         "ShakerCommand",
         &COMMAND_QOS,
     )?;
-    let clock_topic = create(
-        &mut node,
-        "/",
-        "clock",
-        "rosgraph_msgs",
-        "Clock",
-        &clock_qos,
-    )?;
+    let clock_topic = create(&mut node, CLOCK, "rosgraph_msgs", "Clock", &clock_qos)?;
     let state_pub: Publisher<MassState> = node
         .create_publisher(&state_topic, Some(state_qos.clone()))
         .map_err(err("mass state publisher"))?;
     let impact_pub: Publisher<ImpactEvent> = node
-        .create_publisher(&impact_topic, Some(IMPACT_QOS))
+        .create_publisher(&impact_topic, Some(impact_qos))
         .map_err(err("impact publisher"))?;
     let clock_pub: Publisher<Clock> = node
         .create_publisher(&clock_topic, Some(clock_qos))
@@ -404,7 +403,7 @@ fn run(cfg: Config) -> Result<(), String> {
         LogLevel::Info,
         &format!(
             "started {} in DDS domain {}: zeta = {}, e = {}, omega0 = {} rad/s, delta_x = {} m, \
-             Omega = {}, V = {}, publish_rate = {} Hz, real_time_factor = {}, frame_id = '{}'",
+             Omega = {}, V = {}, publish_rate = {} Hz, real_time_factor = {}, frame_id = '{}', history_depth = {}",
             node.fully_qualified_name(),
             cfg.domain_id,
             s.zeta,
@@ -415,9 +414,20 @@ fn run(cfg: Config) -> Result<(), String> {
             s.v,
             s.publish_rate,
             s.real_time_factor,
-            s.frame_id
+            s.frame_id,
+            s.history_depth
         ),
     );
+    let resolved: Vec<String> = TOPICS
+        .iter()
+        .map(|t| {
+            format!(
+                "{t} -> {}",
+                names.resolve(t, Kind::Topic).unwrap_or_default()
+            )
+        })
+        .collect();
+    log.log(LogLevel::Info, &format!("topics: {}", resolved.join(", ")));
     for w in &cfg.warnings {
         log.log(LogLevel::Warn, w);
     }

@@ -25,7 +25,7 @@ pub struct Spec {
 }
 
 /// Every parameter the node declares (besides the built-in `use_sim_time`).
-pub const SPECS: [Spec; 9] = [
+pub const SPECS: [Spec; 10] = [
     Spec {
         name: "zeta",
         doc: "damping ratio ζ [-], >= 0",
@@ -71,7 +71,17 @@ pub const SPECS: [Spec; 9] = [
         doc: "header frame_id of MassState and ImpactEvent",
         change: Change::Runtime,
     },
+    Spec {
+        name: "history_depth",
+        doc: "impacts a late-joining transient-local subscriber gets first [-], integer in \
+              [1, 8192]",
+        change: Change::StartUp,
+    },
 ];
+
+/// Largest `history_depth`: RustDDS's writer keeps at most 8192 (+ 1) samples
+/// (`DEFAULT_WRITER_MAX_SAMPLES`; ros2-client sets no resource limits).
+pub const MAX_HISTORY_DEPTH: i64 = 8192;
 
 /// Parameter values (see [`SPECS`] for units).
 #[derive(Debug, Clone, PartialEq)]
@@ -94,11 +104,13 @@ pub struct Settings {
     pub real_time_factor: f64,
     /// Frame of the published headers.
     pub frame_id: String,
+    /// Impacts kept for late-joining subscribers (the impact writer's KEEP_LAST depth).
+    pub history_depth: i64,
 }
 
 impl Default for Settings {
     /// The paper's baseline (ζ = 0.02, e = 0.85, Ω = 1.75, V = 0.07) in nondimensional units
-    /// (ω0 = 1 rad/s, Δx = 1 m), 100 Hz, real time.
+    /// (ω0 = 1 rad/s, Δx = 1 m), 100 Hz, real time, a history of 1000 impacts.
     fn default() -> Self {
         Self {
             zeta: 0.02,
@@ -110,6 +122,7 @@ impl Default for Settings {
             publish_rate: 100.0,
             real_time_factor: 1.0,
             frame_id: "shaker_base".to_owned(),
+            history_depth: 1000,
         }
     }
 }
@@ -139,6 +152,7 @@ impl Settings {
             "publish_rate" => d(self.publish_rate),
             "real_time_factor" => d(self.real_time_factor),
             "frame_id" => ParameterValue::String(self.frame_id.clone()),
+            "history_depth" => ParameterValue::Integer(self.history_depth),
             _ => return None,
         })
     }
@@ -148,6 +162,7 @@ impl Settings {
         check(name, value)?;
         match (name, value) {
             ("frame_id", ParameterValue::String(s)) => self.frame_id = s.clone(),
+            ("history_depth", ParameterValue::Integer(i)) => self.history_depth = *i,
             (_, ParameterValue::Double(x)) => {
                 let slot = match name {
                     "zeta" => &mut self.zeta,
@@ -204,6 +219,12 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
             )),
         };
     }
+    if name == "history_depth" {
+        return match value {
+            ParameterValue::Integer(i) if (1..=MAX_HISTORY_DEPTH).contains(i) => Ok(()),
+            other => Err(format!("invalid history_depth = {other:?}: {}", spec.doc)),
+        };
+    }
     let x = match value {
         ParameterValue::Double(x) => *x,
         other => {
@@ -232,6 +253,7 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
 pub fn from_yaml(name: &str, y: &Yaml) -> Result<ParameterValue, String> {
     let is_string = name == "frame_id";
     let v = match y {
+        Yaml::Integer(i) if name == "history_depth" => ParameterValue::Integer(*i),
         Yaml::Real(s) => match y.as_f64() {
             Some(x) if !is_string => ParameterValue::Double(x),
             _ => ParameterValue::String(s.clone()),
@@ -355,6 +377,21 @@ mod tests {
             .unwrap_err()
             .contains("unknown"));
         assert!(check("zeta", &ParameterValue::NotSet).is_err());
+        for bad in [
+            ParameterValue::Integer(0),
+            ParameterValue::Integer(MAX_HISTORY_DEPTH + 1),
+            ParameterValue::Double(1000.0),
+        ] {
+            let err = s.set("history_depth", &bad).unwrap_err();
+            assert!(err.contains("invalid history_depth"), "{err}");
+        }
+        s.set("history_depth", &ParameterValue::Integer(1500))
+            .unwrap();
+        assert_eq!(s.history_depth, 1500);
+        assert!(s
+            .check_runtime("history_depth", &ParameterValue::Integer(1000))
+            .unwrap_err()
+            .contains("fixed at start-up"));
         s.set("e", &ParameterValue::Double(1.0)).unwrap();
         s.set("frame_id", &ParameterValue::String("lab".into()))
             .unwrap();
@@ -388,6 +425,8 @@ mod tests {
         assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Double(0.05));
         let (n, y) = parse_assignment("publish_rate:=50").unwrap();
         assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Double(50.0));
+        let (n, y) = parse_assignment("history_depth:=2000").unwrap();
+        assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Integer(2000));
         let (n, y) = parse_assignment("frame_id:=123").unwrap();
         assert_eq!(
             from_yaml(&n, &y).unwrap(),

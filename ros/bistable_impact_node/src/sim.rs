@@ -5,8 +5,10 @@
 //!
 //! Shaker commands take effect at `max(stamp, now, end of the queued commands)` (SI seconds of
 //! simulation time, a zero stamp meaning "now"), where "now" is the time of the last published
-//! state: the node applies commands between publish ticks. A sinusoid set-point continues the
-//! plate position and phase (`Simulator::set_sinusoid`). An external sample `(z, ż)` at time
+//! state: the node applies commands between publish ticks. A sinusoid set-point starts a
+//! [`SetpointRamp`] of [`RAMP_CYCLES`] periods of the new frequency: plate position and
+//! velocity stay continuous and the plate ends on `(V/Ω) sin(·)` about the initial sinusoid's
+//! centre, whatever came before. An external sample `(z, ż)` at time
 //! `t1` makes the plate follow the cubic Hermite curve from its position and velocity at the
 //! start of the piece to `(z, ż)` at `t1`; the simulation then waits at `t1` for the next
 //! sample or command. Plate position is therefore always continuous.
@@ -14,8 +16,8 @@
 use std::collections::VecDeque;
 
 use bistable_core::{
-    ChatterRule, ContactMode, Event, Impact, Instant, Params, PlateMotion, PolyPiece, SimError,
-    Simulator, Sinusoid, SolverOptions,
+    ChatterRule, ContactMode, Event, Impact, Instant, Params, PlateMotion, PolyPiece, SetpointRamp,
+    SimError, Simulator, Sinusoid, SolverOptions,
 };
 
 use crate::inbox::num;
@@ -24,9 +26,23 @@ use crate::params::Settings;
 
 /// Most shaker commands waiting for their instant.
 pub const MAX_QUEUED_COMMANDS: usize = 1024;
+/// Length of a set-point ramp [periods of the new shaker frequency].
+pub const RAMP_CYCLES: f64 = 2.0;
 /// Largest accepted nondimensional plate position, velocity, `Ω` or `V` in a command (the
 /// model is meaningful for values of order one; far larger ones only overflow the integrator).
 pub const MAX_NONDIMENSIONAL: f64 = 1e6;
+
+/// The rule for the fields a mode does not use: they must be zero (so that a command meant
+/// for the other mode, or a field set by mistake, is refused rather than half applied).
+fn unused_zero(fields: &[(&str, f64)], mode: &str) -> Result<(), String> {
+    match fields.iter().find(|(_, v)| *v != 0.0) {
+        Some((name, v)) => Err(format!(
+            "{name} = {} is not used by {mode} and must be 0",
+            num(*v)
+        )),
+        None => Ok(()),
+    }
+}
 
 /// A command waiting for its instant (times in SI seconds, values nondimensional).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -63,7 +79,8 @@ impl Scheduled {
 pub enum Outcome {
     /// Reached a publish tick: publish the state and the clock.
     Tick,
-    /// Stopped at the instant of a queued command (applied by the next call).
+    /// Stopped at the instant of a queued command (applied by the next call) or at the end of
+    /// a piece of a set-point ramp.
     Command,
     /// The plate follows external samples and the last one is reached: waiting for more.
     Blocked,
@@ -83,6 +100,10 @@ pub struct Runner {
     queue: VecDeque<Scheduled>,
     /// SI end of the external piece the plate follows now.
     piece_end: Option<f64>,
+    /// The set-point ramp the plate follows now.
+    ramp: Option<SetpointRamp>,
+    /// Centre of the shaker's sinusoids (the initial one's), nondimensional.
+    centre: f64,
     /// The last impact, held until it is known whether sticking follows it.
     pending: Option<Impact>,
     /// How long after an impact its sticking can start (nondimensional time).
@@ -116,6 +137,8 @@ impl Runner {
             tick_k: 0,
             queue: VecDeque::new(),
             piece_end: None,
+            ramp: None,
+            centre: plate.origin().2,
             pending: None,
             lookahead,
             events: Vec::new(),
@@ -205,6 +228,7 @@ impl Runner {
         let (frontier, external) = self.frontier();
         let item = match cmd.mode {
             ShakerCommand::MODE_SINUSOID => {
+                unused_zero(&[("z", cmd.z), ("zdot", cmd.zdot)], "MODE_SINUSOID")?;
                 let omega = cmd.omega / self.omega0;
                 let v = cmd.velocity / (self.omega0 * self.delta_x);
                 if !(cmd.omega > 0.0 && omega > 0.0 && omega <= MAX_NONDIMENSIONAL) {
@@ -238,6 +262,10 @@ impl Runner {
                 Scheduled::Sinusoid { at, omega, v }
             }
             ShakerCommand::MODE_EXTERNAL => {
+                unused_zero(
+                    &[("omega", cmd.omega), ("velocity", cmd.velocity)],
+                    "MODE_EXTERNAL",
+                )?;
                 let z = cmd.z / self.delta_x;
                 let zd = cmd.zdot / (self.omega0 * self.delta_x);
                 if z.abs() > MAX_NONDIMENSIONAL || zd.abs() > MAX_NONDIMENSIONAL {
@@ -315,12 +343,21 @@ impl Runner {
             self.queue.pop_front();
             let t = self.now();
             let result = match item {
-                Scheduled::Sinusoid { omega, v, .. } => self.sim.set_sinusoid(omega, v).map(|()| {
-                    self.piece_end = None;
-                    format!("shaker sinusoid applied at t = {t} s")
-                }),
+                Scheduled::Sinusoid { omega, v, .. } => {
+                    SetpointRamp::start(&mut self.sim, self.centre, omega, v, RAMP_CYCLES).map(
+                        |ramp| {
+                            self.piece_end = None;
+                            self.ramp = Some(ramp);
+                            format!(
+                                "shaker sinusoid ramp from t = {t} s to t = {} s",
+                                ramp.end().to_f64() / self.omega0
+                            )
+                        },
+                    )
+                }
                 Scheduled::Sample { end, z, zd, .. } => self.follow_sample(end, z, zd).map(|()| {
                     self.piece_end = Some(end);
+                    self.ramp = None;
                     format!("external plate motion to t = {end} s applied at t = {t} s")
                 }),
             };
@@ -358,6 +395,13 @@ impl Runner {
     /// are complete (their sticking flag known) to `impacts`, in order.
     pub fn advance(&mut self, impacts: &mut Vec<ImpactEvent>) -> Outcome {
         self.apply_due();
+        if let Some(ramp) = self.ramp {
+            match ramp.follow(&mut self.sim) {
+                Ok(true) => {}
+                Ok(false) => self.ramp = None,
+                Err(e) => self.halt(&e),
+            }
+        }
         if self.halted.is_some() {
             return Outcome::Halted;
         }
@@ -375,7 +419,11 @@ impl Runner {
             let h = h.to_f64();
             if h < target {
                 target = h;
-                outcome = Outcome::Blocked;
+                outcome = if self.ramp.is_some() {
+                    Outcome::Command
+                } else {
+                    Outcome::Blocked
+                };
             }
         }
         if outcome == Outcome::Blocked && target <= now {
@@ -387,17 +435,21 @@ impl Runner {
             .advance_to(target, &mut |e: &Event| events.push(*e));
         self.collect(impacts);
         if let Err(e) = result {
-            self.halted = Some(format!(
-                "simulation stopped at t = {} s: {e}; it resumes after a parameter change or \
-                 shaker command that lets it go on",
-                self.now()
-            ));
+            self.halt(&e);
             return Outcome::Halted;
         }
         if outcome == Outcome::Tick {
             self.tick_k += 1;
         }
         outcome
+    }
+
+    fn halt(&mut self, e: &SimError) {
+        self.halted = Some(format!(
+            "simulation stopped at t = {} s: {e}; it resumes after a parameter change or shaker \
+             command that lets it go on",
+            self.now()
+        ));
     }
 
     /// Turns the collected events into complete impacts.
@@ -410,7 +462,11 @@ impl Runner {
                 }
             }
             match e {
-                Event::Impact(i) => {
+                Event::Impact(mut i) => {
+                    // On a ramp's pieces the shaker phase is the ramp's.
+                    if let Some(ramp) = &self.ramp {
+                        i.phase = ramp.impact_phase(&i);
+                    }
                     if let Some(p) = self.pending.replace(i) {
                         out.push(self.impact_msg(&p, false));
                     }
@@ -460,13 +516,19 @@ impl Runner {
         let (w, l) = (self.omega0, self.delta_x);
         let s = self.sim.state();
         let t = s.t / w;
-        let (mode, omega, velocity) = match self.sim.plate() {
-            PlateMotion::Sinusoid(p) => (
+        // During a ramp: its target set-point.
+        let sinusoid = match (self.sim.plate(), &self.ramp) {
+            (PlateMotion::Sinusoid(p), _) => Some(*p),
+            (PlateMotion::Poly(_), Some(ramp)) => Some(ramp.target()),
+            (PlateMotion::Poly(_), None) => None,
+        };
+        let (mode, omega, velocity) = match sinusoid {
+            Some(p) => (
                 ShakerCommand::MODE_SINUSOID,
                 p.omega() * w,
                 p.velocity() * w * l,
             ),
-            PlateMotion::Poly(_) => (ShakerCommand::MODE_EXTERNAL, f64::NAN, f64::NAN),
+            None => (ShakerCommand::MODE_EXTERNAL, f64::NAN, f64::NAN),
         };
         MassState {
             header: self.header(t),

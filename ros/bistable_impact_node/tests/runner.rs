@@ -1,10 +1,10 @@
 //! The node's simulation loop against the core simulator: every impact, in order, at its
 //! located time; commands at their documented instants; bad input refused.
 
-use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
+use bistable_core::{Event, Params, SetpointRamp, Simulator, Sinusoid, SolverOptions};
 use bistable_impact_node::msg::{Header, ImpactEvent, ShakerCommand, Time};
 use bistable_impact_node::params::Settings;
-use bistable_impact_node::sim::{Outcome, Runner, MAX_QUEUED_COMMANDS};
+use bistable_impact_node::sim::{Outcome, Runner, MAX_QUEUED_COMMANDS, RAMP_CYCLES};
 
 fn settings(omega: f64, v: f64, rate: f64) -> Settings {
     Settings {
@@ -160,13 +160,31 @@ fn sinusoid_command_takes_effect_at_its_stamp_without_a_jump() {
         (sim.state().z - z_before).abs() < 1e-15,
         "plate position is continuous"
     );
-    sim.set_sinusoid(2.5, 0.1).unwrap();
+    // The node ramps to the new set-point about the initial centre.
+    let ramp = SetpointRamp::start(&mut sim, 0.0, 2.5, 0.1, RAMP_CYCLES).unwrap();
+    reference.extend(
+        ramp.events_through(&mut sim)
+            .unwrap()
+            .into_iter()
+            .filter_map(|e| e.impact()),
+    );
+    let on_ramp = reference.len();
     reference.extend(core_impacts(&mut sim, 149.0));
     assert!(reference.len() > 20);
+    // Impacts on the ramp (40.25 s to 45.3 s) have the ramp's phase.
+    let ramp_end = ramp.end().to_f64();
+    let during: Vec<_> = reference
+        .iter()
+        .filter(|i| i.t > 40.25 && i.t < ramp_end)
+        .collect();
+    assert!(!during.is_empty() && on_ramp > during.len());
+    assert!(during
+        .iter()
+        .all(|i| i.phase.is_some_and(|p| (0.0..1.0).contains(&p))));
     for (got, want) in impacts.iter().zip(&reference) {
         assert_eq!(
-            (got.index, got.t, got.v_after),
-            (want.index, want.t, want.v_after)
+            (got.index, got.t, got.v_after, got.phase),
+            (want.index, want.t, want.v_after, want.phase.unwrap())
         );
     }
     // A zero stamp means "now"; a stamp in the past too.
@@ -260,6 +278,17 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
         (cmd(1, 2.0, 0.0, 0.0, 0.0, 0.0), "not after"),
         (cmd(7, 0.0, 1.0, 0.1, 0.0, 0.0), "unknown mode 7"),
         (cmd(255, 0.0, 1.0, 0.1, 0.0, 0.0), "unknown mode"),
+        // Fields the mode does not use must be 0.
+        (
+            cmd(0, 0.0, 1.75, 0.07, 0.01, 0.0),
+            "z = 0.01 is not used by MODE_SINUSOID and must be 0",
+        ),
+        (cmd(0, 0.0, 1.75, 0.07, 0.0, -1e-300), "zdot = -1e-300"),
+        (
+            cmd(1, 0.0, 1.75, 0.0, 0.01, 0.0),
+            "omega = 1.75 is not used by MODE_EXTERNAL",
+        ),
+        (cmd(1, 0.0, 0.0, 0.07, 0.01, 0.0), "velocity = 0.07"),
     ] {
         let err = r.command(&c).unwrap_err();
         assert!(err.contains(needle), "{c:?}: {err}");
@@ -281,6 +310,8 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
     let last = impacts.last().unwrap();
     assert_eq!(last.t, reference[last.index as usize].t);
     assert_eq!(r.state().shaker_omega, 1.75);
+    // -0 is zero.
+    r.command(&cmd(0, 0.0, 1.75, 0.07, -0.0, -0.0)).unwrap();
     // Commands due now take effect at once: any number of them between two steps is accepted
     // (regression: under a flood of such commands the queue filled and valid ones were
     // refused).
@@ -347,4 +378,52 @@ fn runtime_changes_of_parameters_and_rate() {
     assert_eq!(ticks, [40.25, 40.5, 40.75, 41.0, 41.25, 41.5, 41.75, 42.0]);
     r.set_frame_id("lab");
     assert_eq!(r.state().header.frame_id, "lab");
+}
+
+#[test]
+fn sinusoid_commands_end_on_the_set_point_about_the_initial_centre() {
+    // SI units (omega0 = 2 rad/s, delta_x = 0.5 m); 30 commands at random stamps, many while
+    // the previous ramp runs, two after external samples.
+    let mut r = Runner::new(&Settings {
+        omega0: 2.0,
+        delta_x: 0.5,
+        ..settings(1.75, 0.07, 20.0)
+    })
+    .unwrap();
+    let mut seed = 7u64;
+    let mut uniform = |a: f64, b: f64| {
+        seed = seed
+            .wrapping_mul(6364136223846793005)
+            .wrapping_add(1442695040888963407);
+        a + (b - a) * ((seed >> 11) as f64 / (1u64 << 53) as f64)
+    };
+    let mut impacts = Vec::new();
+    let mut t = 0.0;
+    for k in 0..30 {
+        t += uniform(0.2, 4.0);
+        if k % 15 == 14 {
+            r.command(&cmd(1, t, 0.0, 0.0, 0.1, -0.05)).unwrap();
+            t += 0.5;
+        }
+        let (omega, velocity) = (uniform(2.0, 5.0), uniform(0.05, 0.3));
+        r.command(&cmd(0, t, omega, velocity, 0.0, 0.0)).unwrap();
+        while r.now() < t {
+            assert_ne!(r.advance(&mut impacts), Outcome::Halted, "{:?}", r.halted());
+        }
+    }
+    assert_eq!(r.commands_dropped(), 0);
+    // After the last ramp (2 periods of at least pi s): z = (V/omega) sin(.) about 0, so
+    // z^2 + (zdot/omega)^2 = (V/omega)^2 at every tick.
+    let (_, ticks) = run_until(&mut r, t + 2.0 * std::f64::consts::PI);
+    assert!(ticks.len() > 100);
+    let mut worst = 0.0_f64;
+    for _ in 0..200 {
+        r.advance(&mut impacts);
+        let st = r.state();
+        assert_eq!(st.shaker_mode, ShakerCommand::MODE_SINUSOID);
+        let a = st.shaker_velocity / st.shaker_omega;
+        let got = st.z.hypot(st.zdot / st.shaker_omega);
+        worst = worst.max((got - a).abs());
+    }
+    assert!(worst < 1e-14, "{worst:e}");
 }

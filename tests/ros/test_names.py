@@ -1,0 +1,62 @@
+"""ROS names as rcl resolves them: two nodes in namespaces /rig1 and /rig2 (different Omega) in
+one DDS domain, each peer subscription sees only its rig's impacts, equal to the core's; topic,
+node name and /clock remapping; invalid rules refused with exit status 2."""
+import subprocess
+
+from bistable_impact_msgs.msg import ImpactEvent
+from common import NODE, NodeProcess, Spinner, assert_impacts_match, keep_all_impacts, reference
+from rosgraph_msgs.msg import Clock
+
+RIG1 = ("-r", "__ns:=/rig1", "-r", "/clock:=clock", "-p", "Omega:=1.75")
+# rig2 also renames the node and remaps its impacts to a private name and its clock.
+RIG2 = ("-r", "__ns:=/rig2", "-r", "__node:=sim2", "-r", "bistable/impacts:=~/hits",
+        "-r", "/clock:=clock", "-p", "Omega:=2.2")
+
+
+def test_two_rigs_in_one_domain_see_only_their_own_impacts():
+    domain = 51
+    peer = Spinner(domain, "names_peer")
+    got = {name: [] for name in ["/rig1/bistable/impacts", "/rig2/sim2/hits", "/rig2/bistable/impacts",
+                                 "/bistable/impacts"]}
+    for name, sink in got.items():
+        peer.node.create_subscription(ImpactEvent, name, sink.append, keep_all_impacts())
+    clocks = {name: [] for name in ["/rig1/clock", "/rig2/clock", "/clock"]}
+    for name, sink in clocks.items():
+        peer.node.create_subscription(Clock, name, sink.append, 10)
+    common = ("-p", "real_time_factor:=25.0", "-p", "publish_rate:=20")
+    rig1 = NodeProcess(*RIG1, *common, domain=domain)
+    rig2 = NodeProcess(*RIG2, *common, domain=domain)
+    try:
+        done = lambda: all(got[n] and got[n][-1].t > 60.0 for n in ["/rig1/bistable/impacts", "/rig2/sim2/hits"])
+        assert peer.spin_until(done, 40), {n: len(v) for n, v in got.items()}
+        names = peer.node.get_node_names_and_namespaces()
+        assert ("bistable_impact", "/rig1") in names and ("sim2", "/rig2") in names, names
+        topics = dict(peer.node.get_topic_names_and_types())
+        for name in ["/rig1/bistable/mass_state", "/rig1/bistable/impacts", "/rig1/bistable/shaker_command",
+                     "/rig2/bistable/mass_state", "/rig2/sim2/hits", "/rig2/bistable/shaker_command"]:
+            assert name in topics, sorted(topics)
+        assert topics["/rig2/sim2/hits"] == ["bistable_impact_msgs/msg/ImpactEvent"]
+        assert "rosgraph_msgs/msg/Clock" in topics["/rig1/clock"] and "rosgraph_msgs/msg/Clock" in topics["/rig2/clock"]
+        # Only the peer's own subscriptions are on the unremapped names.
+        assert "bistable_impact_msgs/msg/MassState" not in topics.get("/bistable/mass_state", [])
+    finally:
+        log1, log2 = rig1.stop(), rig2.stop()
+        peer.close()
+    assert "started /rig1/bistable_impact" in log1 and "started /rig2/sim2" in log2
+    assert "bistable/impacts -> /rig2/sim2/hits" in log2, log2[:3000]
+    assert got["/rig2/bistable/impacts"] == [] and got["/bistable/impacts"] == []
+    assert clocks["/clock"] == [] and clocks["/rig1/clock"] and clocks["/rig2/clock"]
+    for name, omega in [("/rig1/bistable/impacts", 1.75), ("/rig2/sim2/hits", 2.2)]:
+        impacts = got[name]
+        assert len(impacts) > 15, name
+        assert_impacts_match(impacts, reference(omega, 0.07, impacts[-1].t + 1.0))
+    # Different rigs, different responses.
+    assert abs(got["/rig1/bistable/impacts"][5].t - got["/rig2/sim2/hits"][5].t) > 1e-3
+
+
+def test_invalid_remapping_rules_are_refused_with_status_2():
+    for rule, needle in [("__ns:=rig1", "must be absolute"), ("bistable/impacts:=1hits", "digit"),
+                         ("bistable/*:=x", "wildcards"), ("__node:=a/b", "contains '/'"),
+                         ("bistable/impacts:={nodes}/x", "unknown substitution"), ("impacts", "from:=to")]:
+        r = subprocess.run([NODE, "--ros-args", "-r", rule], capture_output=True, text=True, timeout=10)
+        assert r.returncode == 2 and needle in r.stderr and rule in r.stderr, (rule, r.returncode, r.stderr)
