@@ -712,5 +712,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify_many, m)?)?;
     m.add_function(wrap_pyfunction!(thresholds_of, m)?)?;
     m.add_class::<PySimulator>()?;
+    // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
+    m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;
     Ok(())
 }

@@ -5,6 +5,9 @@ from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 Column = Tuple[str, str, bytes]  # name, numpy dtype without byte order ('f8' | 'i8'), LE data
 Event = Dict[str, Any]
 
+#: Keys of the classify record, in order: the map CSV's columns.
+COLUMNS: List[str]
+
 def simulate(
     omega: float,
     velocity: float,

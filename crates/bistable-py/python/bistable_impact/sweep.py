@@ -9,25 +9,9 @@ import numpy as np
 
 from . import _native
 
-#: Columns of the map (the CLI map CSV's header, in order).
-COLUMNS = (
-    "omega",
-    "velocity",
-    "zeta",
-    "restitution",
-    "class",
-    "period",
-    "chaotic",
-    "lyapunov",
-    "snap_throughs",
-    "final_well",
-    "at_rest_in_second_well",
-    "impacts_per_period",
-    "sticking",
-    "periods_simulated",
-    "stopped_early",
-    "wall_time_s",
-)
+#: Columns of the map (the CLI map CSV's header, in order; defined once, in
+#: ``bistable_analysis::record::COLUMNS``).
+COLUMNS = tuple(_native.COLUMNS)
 
 
 def _classify_chunk(points, options):
