@@ -38,6 +38,7 @@ use crate::model::{
     below_plate, describe_event, origin_in_range, plate_inputs, plate_piece, restore_phase_ref,
     save_phase_ref, Observed, PlateInputs, Scale, Setup, ShakerMode, MAX_CLOCK_SPAN,
 };
+use crate::num::Num;
 
 /// Horizon (time units) of the accumulation rule that hands a chatter sequence to the core: the
 /// flights the host still resolves last at least `(1−e)·ME_HORIZON` (1.5e-3 at `e = 0.85`) and
@@ -203,13 +204,9 @@ impl Me {
                 "the FMU state's counters, last impact or chatter tail are inconsistent".into(),
             );
         }
-        if (s.x - BARRIER).abs() > 1e-9 && s.well != Well::of(s.x) {
-            return Err(format!(
-                "the FMU state's well {} does not match the mass position x = {} m",
-                s.well.number(),
-                setup.scale.length(s.x)
-            ));
-        }
+        // The well may differ from the side of the barrier the mass is on: the host sets the
+        // states, and the snap-through is applied at its next event update (the barrier
+        // indicator has changed sign), so a state saved in between is a state of the run.
         let me = Self {
             scale: setup.scale,
             mode: setup.mode,
@@ -286,7 +283,9 @@ impl Me {
         };
         if !(xs.is_finite() && vs.is_finite()) {
             return Err(format!(
-                "continuous states x = {xs} m, v = {vs} m/s must be finite"
+                "continuous states x = {} m, v = {} m/s must be finite",
+                Num(*xs),
+                Num(*vs)
             ));
         }
         let sc = &self.scale;
@@ -295,7 +294,9 @@ impl Me {
         let energies = sc.energy(potential::energy(xn)) + sc.energy(potential::kinetic(vn));
         if !(xn.is_finite() && vn.is_finite() && energies.is_finite()) {
             return Err(format!(
-                "continuous states x = {xs} m, v = {vs} m/s give non-finite energies"
+                "continuous states x = {} m, v = {} m/s give non-finite energies",
+                Num(*xs),
+                Num(*vs)
             ));
         }
         self.s.x = xn;

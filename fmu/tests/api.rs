@@ -1359,3 +1359,28 @@ fn model_exchange_states_roll_back_and_refuse_the_other_interface() {
         assert_eq!(fmi2FreeFMUstate(g.c, &mut restored), fmi2OK);
     }
 }
+
+/// Found by the long fuzz campaign: the host may set states across the barrier before it
+/// handles the barrier event (the well is updated in event mode), and an FMU state taken in
+/// between is the FMU's own: it restores, and the next event update counts the snap-through.
+#[test]
+fn model_exchange_state_across_the_barrier_before_its_event_restores() {
+    let mut f = Fmu::started_as(fmi2ModelExchange, &[]);
+    me_events(&f);
+    unsafe {
+        assert_eq!(fmi2SetContinuousStates(f.c, [0.8, 0.1].as_ptr(), 2), fmi2OK);
+        assert_eq!(f.int(var::well), 1);
+        let mut state: fmi2FMUstate = std::ptr::null_mut();
+        assert_eq!(fmi2GetFMUstate(f.c, &mut state), fmi2OK);
+        assert_eq!(fmi2SetFMUstate(f.c, state), fmi2OK, "{:?}", f.messages());
+        let (mut enter, mut terminate) = (fmi2False, fmi2False);
+        assert_eq!(
+            fmi2CompletedIntegratorStep(f.c, fmi2True, &mut enter, &mut terminate),
+            fmi2OK
+        );
+        assert_eq!(fmi2EnterEventMode(f.c), fmi2OK);
+        me_events(&f);
+        assert_eq!((f.int(var::well), f.int(var::snap_through_count)), (2, 1));
+        assert_eq!(fmi2FreeFMUstate(f.c, &mut state), fmi2OK);
+    }
+}
