@@ -1365,7 +1365,7 @@ fn model_exchange_states_roll_back_and_refuse_the_other_interface() {
 /// between is the FMU's own: it restores, and the next event update counts the snap-through.
 #[test]
 fn model_exchange_state_across_the_barrier_before_its_event_restores() {
-    let mut f = Fmu::started_as(fmi2ModelExchange, &[]);
+    let f = Fmu::started_as(fmi2ModelExchange, &[]);
     me_events(&f);
     unsafe {
         assert_eq!(fmi2SetContinuousStates(f.c, [0.8, 0.1].as_ptr(), 2), fmi2OK);
