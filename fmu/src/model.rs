@@ -548,8 +548,8 @@ impl Model {
                 let inputs = plate_inputs(values, derivatives);
                 let sample = Sample {
                     t: now,
-                    z: inputs[0].unwrap_or(0.0) / self.scale.dx,
-                    zdot: inputs[1].unwrap_or(0.0) / (self.scale.omega0 * self.scale.dx),
+                    z: self.scale.plate_coefficient(0, values[var::z_in]),
+                    zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
                 };
                 let mut history = self.history;
                 history

@@ -251,15 +251,12 @@ fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
         q[2 * i] = s.z;
         q[2 * i + 1] = s.z;
     }
-    // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i].
-    let mut dz = [0.0; MAX_POLY_DEGREE + 1];
-    for (i, s) in nodes.iter().enumerate() {
-        dz[2 * i + 1] = s.zdot;
-    }
+    // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i]; on a doubled node the
+    // first divided difference is the sample's velocity.
     for j in 1..n {
         for i in (j..n).rev() {
             q[i] = if j == 1 && i % 2 == 1 {
-                dz[i]
+                nodes[i / 2].zdot
             } else {
                 (q[i] - q[i - 1]) / (x[i] - x[i - j])
             };
