@@ -5,14 +5,21 @@
 //! entry per scalar variable, in file order) and, in `mod var`, one `usize` constant per variable
 //! named exactly like it (its position in `VARS`); likewise `CATEGORIES` and `mod cat` for the
 //! log categories; `STATES` and `DERIVATIVES` (the continuous states and their derivatives, in
-//! ModelStructure/Derivatives order) and `NUMBER_OF_EVENT_INDICATORS` for Model Exchange.
+//! ModelStructure/Derivatives order) and `EVENT_INDICATORS` (the variables named by the vendor
+//! annotation, `numberOfEventIndicators` of them) for Model Exchange.
 //! Renaming or removing a variable the Rust code uses is then a compile error.
+//!
+//! Output `$OUT_DIR/fmi3_model_description.xml`: the FMI 3.0 model description, generated from the
+//! same file (see `build_fmi3.rs`); the FMI 3.0 FMU has no variable list of its own.
 
 use std::collections::BTreeSet;
 use std::fmt::Write as _;
 use std::path::PathBuf;
 
 use sha2::{Digest, Sha256};
+
+#[path = "build_fmi3.rs"]
+mod fmi3;
 
 const KEY: &str = "guid=\"";
 
@@ -125,6 +132,7 @@ fn generate(text: &str) -> Result<String, String> {
             "input" => "Input",
             "output" => "Output",
             "local" => "Local",
+            "independent" => "Independent",
             other => return Err(format!("{name}: causality {other} not handled")),
         };
         if causality == "Output" {
@@ -135,6 +143,7 @@ fn generate(text: &str) -> Result<String, String> {
             .children()
             .find(|n| n.is_element())
             .ok_or(format!("{name}: no type element"))?;
+        let enumeration = ty.tag_name().name() == "Enumeration";
         let (kind, lo, hi) = match ty.tag_name().name() {
             "Real" => ("Real", f64::NEG_INFINITY, f64::INFINITY),
             "Integer" => ("Integer", f64::from(i32::MIN), f64::from(i32::MAX)),
@@ -172,7 +181,7 @@ fn generate(text: &str) -> Result<String, String> {
         writeln!(
             out,
             "    Var {{ name: {name:?}, vr: {vr}, kind: Kind::{kind}, causality: Causality::{causality}, \
-             tunable: {tunable}, start: {}, min: {}, max: {}, unit: {unit:?} }},",
+             tunable: {tunable}, enumeration: {enumeration}, start: {}, min: {}, max: {}, unit: {unit:?} }},",
             lit(start),
             lit(min),
             lit(max)
@@ -199,6 +208,30 @@ fn generate(text: &str) -> Result<String, String> {
     }
     if indicators.fract() != 0.0 || !(0.0..=64.0).contains(&indicators) {
         return Err(format!("numberOfEventIndicators = {indicators}"));
+    }
+    let indicator_vars = event_indicators(root)?;
+    if indicator_vars.len() != indicators as usize {
+        return Err(format!(
+            "numberOfEventIndicators = {indicators} but the vendor annotation names {} indicators",
+            indicator_vars.len()
+        ));
+    }
+    let all: Vec<roxmltree::Node> = root
+        .descendants()
+        .filter(|n| n.has_tag_name("ScalarVariable"))
+        .collect();
+    let mut indicator_positions = Vec::new();
+    for name in &indicator_vars {
+        let i = all
+            .iter()
+            .position(|v| v.attribute("name") == Some(name))
+            .ok_or(format!("event indicator {name} is not a variable"))?;
+        if !continuous_reals.contains(&(i + 1)) || all[i].attribute("causality") != Some("local") {
+            return Err(format!(
+                "event indicator {name} must be a local continuous Real"
+            ));
+        }
+        indicator_positions.push(i + 1);
     }
     let ders: Vec<usize> = derivatives.iter().map(|&(d, _)| d).collect();
     let initial: Vec<usize> = outputs
@@ -276,11 +309,15 @@ fn generate(text: &str) -> Result<String, String> {
         positions(&ders)
     )
     .unwrap();
-    writeln!(code, "/// `numberOfEventIndicators`.").unwrap();
     writeln!(
         code,
-        "pub const NUMBER_OF_EVENT_INDICATORS: usize = {};",
-        indicators as usize
+        "/// The event indicators (positions in [`VARS`]), `numberOfEventIndicators` of them."
+    )
+    .unwrap();
+    writeln!(
+        code,
+        "pub static EVENT_INDICATORS: &[usize] = &[{}];",
+        positions(&indicator_positions)
     )
     .unwrap();
     writeln!(
@@ -308,6 +345,26 @@ fn generate(text: &str) -> Result<String, String> {
     Ok(code)
 }
 
+/// Names of the event-indicator variables, from
+/// `VendorAnnotations/Tool[@name="bistable-impact"]/EventIndicators/Indicator`.
+fn event_indicators(root: roxmltree::Node) -> Result<Vec<String>, String> {
+    let tool = root
+        .descendants()
+        .filter(|n| n.has_tag_name("Tool"))
+        .find(|n| n.attribute("name") == Some("bistable-impact"));
+    let Some(tool) = tool else {
+        return Ok(Vec::new());
+    };
+    tool.descendants()
+        .filter(|n| n.has_tag_name("Indicator"))
+        .map(|n| {
+            n.attribute("name")
+                .map(str::to_string)
+                .ok_or_else(|| "Indicator without name".to_string())
+        })
+        .collect()
+}
+
 fn main() {
     let xml = PathBuf::from(std::env::var("CARGO_MANIFEST_DIR").unwrap())
         .join("..")
@@ -315,11 +372,15 @@ fn main() {
     println!("cargo:rerun-if-changed={}", xml.display());
     let text = std::fs::read_to_string(&xml)
         .unwrap_or_else(|e| panic!("cannot read {}: {e}", xml.display()));
+    let out = PathBuf::from(std::env::var("OUT_DIR").unwrap());
     match generate(&text) {
-        Ok(code) => {
-            let out = PathBuf::from(std::env::var("OUT_DIR").unwrap()).join("model_description.rs");
-            std::fs::write(out, code).expect("write model_description.rs");
-        }
+        Ok(code) => std::fs::write(out.join("model_description.rs"), code)
+            .expect("write model_description.rs"),
         Err(e) => panic!("modelDescription.xml: {e}"),
+    }
+    match fmi3::generate(&text) {
+        Ok(xml) => std::fs::write(out.join("fmi3_model_description.xml"), xml)
+            .expect("write fmi3_model_description.xml"),
+        Err(e) => panic!("modelDescription.xml (FMI 3.0 view): {e}"),
     }
 }

@@ -1,5 +1,7 @@
 # FMU: packaging, tests (C host, fmpy) and demo/benchmark steps. Included by the top-level Makefile.
-#   make fmu            target/fmu/bistable_impact.fmu (release build, packaged once)
+#   make fmu            target/fmu/bistable_impact.fmu (FMI 2.0) and bistable_impact_fmi3.fmu (FMI 3.0):
+#                       one release build of the binary, which exports both APIs; the FMI 3.0
+#                       modelDescription.xml is generated from the FMI 2.0 one
 #   make test-fmu       C host (cbindgen header, dlopen) + fmpy validate + pytest tests/fmu
 #   make fmu-reference  regenerate the co-simulation regression CSVs in tests/fmu/reference/
 #   make fmu-guid       rewrite the guid of modelDescription.xml after editing it
@@ -13,6 +15,8 @@ FMU_DIR := target/fmu
 FMU := $(FMU_DIR)/$(FMU_NAME).fmu
 FMU_STAGE := $(FMU_DIR)/stage
 FMU_SO := $(FMU_STAGE)/binaries/linux64/$(FMU_NAME).so
+FMU3 := $(FMU_DIR)/$(FMU_NAME)_fmi3.fmu
+FMU3_STAGE := $(FMU_DIR)/stage3
 FMU_HOST := $(FMU_DIR)/host
 VENV_PY := .venv/bin/python
 # Quick fuzz run in test-fmu (under a second) and the long campaign of stress-fmu.
@@ -39,7 +43,13 @@ fmu: setup
 	cp $(wildcard tests/fmu/reference/*.csv) tests/fmu/reference/README.md $(FMU_STAGE)/extra/
 	rm -f $(FMU)
 	cd $(FMU_STAGE) && python3 -m zipfile -c ../$(FMU_NAME).fmu modelDescription.xml binaries documentation extra
-	@echo "fmu: $(FMU)"
+	rm -rf $(FMU3_STAGE) && mkdir -p $(FMU3_STAGE)/binaries/x86_64-linux $(FMU3_STAGE)/documentation
+	target/release/fmi3-model-description > $(FMU3_STAGE)/modelDescription.xml
+	cp $(FMU_SO) $(FMU3_STAGE)/binaries/x86_64-linux/
+	cp fmu/documentation/index.html $(FMU3_STAGE)/documentation/
+	rm -f $(FMU3)
+	cd $(FMU3_STAGE) && python3 -m zipfile -c ../$(FMU_NAME)_fmi3.fmu modelDescription.xml binaries documentation
+	@echo "fmu: $(FMU) $(FMU3)"
 
 FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/me.c tests/fmu_host/fuzz.c
 $(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h fmu/include/$(FMU_NAME).h

@@ -14,15 +14,16 @@ use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::ptr;
 
 use crate::fmi2::*;
-use crate::instance::{allowed, Instance, Interface, Lifecycle, Outcome};
-use crate::md::{cat, Kind, GUID};
+use crate::instance::Access;
+use crate::instance::{allowed, Api, Instance, Interface, Lifecycle, Logger, Outcome};
+use crate::md::{cat, GUID};
 use crate::state::Snapshot;
 
 /// Largest array length accepted from a host (guards the slice construction).
 const MAX_LEN: usize = 1 << 28;
 
 /// The instance behind a handle, if it looks live.
-unsafe fn instance<'a>(c: fmi2Component) -> Option<&'a mut Instance> {
+pub(crate) unsafe fn instance<'a>(c: fmi2Component) -> Option<&'a mut Instance> {
     let inst = c.cast::<Instance>().as_mut()?;
     inst.is_live().then_some(inst)
 }
@@ -36,7 +37,7 @@ fn panic_text(p: &(dyn std::any::Any + Send)) -> String {
 
 /// Runs `f` on the instance if `func` is allowed in its state, logging a refusal; a panic is
 /// caught, logged and leaves the instance in the error state.
-fn call(
+pub(crate) fn call(
     c: fmi2Component,
     func: &str,
     mask: allowed::Mask,
@@ -50,6 +51,15 @@ fn call(
     let run = catch_unwind(AssertUnwindSafe(|| {
         // SAFETY: checked above; only this call uses the instance.
         let inst = unsafe { &mut *inst };
+        if !func.starts_with(inst.api.prefix()) {
+            let msg = format!(
+                "the instance was made by {}Instantiate*: use the {} functions",
+                inst.api.prefix(),
+                inst.api.prefix()
+            );
+            inst.log_error(func, &msg);
+            return fmi2Error;
+        }
         if !allowed::provides(mask, inst.interface) {
             let msg = format!("not provided by a {:?} instance", inst.interface);
             inst.log_error(func, &msg);
@@ -78,7 +88,7 @@ fn call(
 }
 
 /// A host array of `n` elements (NULL allowed only when `n == 0`).
-unsafe fn array<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], String> {
+pub(crate) unsafe fn array<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], String> {
     match n {
         0 => Ok(&[]),
         n if n > MAX_LEN => Err(format!("{what}: length {n} is too large")),
@@ -88,7 +98,11 @@ unsafe fn array<'a, T>(p: *const T, n: usize, what: &str) -> Result<&'a [T], Str
 }
 
 /// A host output array of `n` elements.
-unsafe fn array_mut<'a, T>(p: *mut T, n: usize, what: &str) -> Result<&'a mut [T], String> {
+pub(crate) unsafe fn array_mut<'a, T>(
+    p: *mut T,
+    n: usize,
+    what: &str,
+) -> Result<&'a mut [T], String> {
     array(p, n, what)?;
     Ok(if n == 0 {
         &mut []
@@ -98,12 +112,12 @@ unsafe fn array_mut<'a, T>(p: *mut T, n: usize, what: &str) -> Result<&'a mut [T
 }
 
 /// A host pointer to one value to write.
-unsafe fn out<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, String> {
+pub(crate) unsafe fn out<'a, T>(p: *mut T, what: &str) -> Result<&'a mut T, String> {
     p.as_mut().ok_or_else(|| format!("{what} is NULL"))
 }
 
 /// A host string (lossy UTF-8).
-unsafe fn text(p: fmi2String, what: &str) -> Result<String, String> {
+pub(crate) unsafe fn text(p: fmi2String, what: &str) -> Result<String, String> {
     if p.is_null() {
         return Err(format!("{what} is NULL"));
     }
@@ -162,8 +176,9 @@ unsafe fn instantiate(
     let inst = Instance::new(
         cname,
         interface.unwrap_or(Interface::CoSimulation),
+        Api::Fmi2,
         f.componentEnvironment,
-        f.logger,
+        Logger::Fmi2(f.logger),
         logging_on != fmi2False,
     );
     let checked = (|| {
@@ -272,34 +287,34 @@ pub unsafe extern "C" fn fmi2Reset(c: fmi2Component) -> fmi2Status {
 
 // ---- getting and setting values ----
 
-/// `fmi2Get<T>`: values of type `kind`, converted by `conv`.
+/// `fmi2Get<T>`: values read as `ty`, converted by `conv`.
 unsafe fn get_values<T>(
     c: fmi2Component,
     func: &str,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *mut T,
-    kind: Kind,
+    ty: Access,
     conv: fn(f64) -> T,
 ) -> fmi2Status {
     call(c, func, allowed::GET, |inst| {
         let vrs = array(vr, nvr, "vr")?;
         let dst = array_mut(value, nvr, "value")?;
-        for (d, v) in dst.iter_mut().zip(inst.get(vrs, kind)?) {
+        for (d, v) in dst.iter_mut().zip(inst.get(vrs, ty)?) {
             *d = conv(v);
         }
         Ok(fmi2OK)
     })
 }
 
-/// `fmi2Set<T>`: values of type `kind`, converted by `conv` (range-checked by the instance).
+/// `fmi2Set<T>`: values written as `ty`, converted by `conv` (range-checked by the instance).
 unsafe fn set_values<T: Copy>(
     c: fmi2Component,
     func: &str,
     vr: *const fmi2ValueReference,
     nvr: usize,
     value: *const T,
-    kind: Kind,
+    ty: Access,
     conv: fn(T) -> f64,
 ) -> fmi2Status {
     call(c, func, allowed::SET, |inst| {
@@ -308,7 +323,7 @@ unsafe fn set_values<T: Copy>(
             .iter()
             .map(|&v| conv(v))
             .collect();
-        inst.set(vrs, &vals, kind)
+        inst.set(vrs, &vals, ty)
     })
 }
 
@@ -320,7 +335,7 @@ pub unsafe extern "C" fn fmi2GetReal(
     nvr: usize,
     value: *mut fmi2Real,
 ) -> fmi2Status {
-    get_values(c, "fmi2GetReal", vr, nvr, value, Kind::Real, |v| v)
+    get_values(c, "fmi2GetReal", vr, nvr, value, Access::Real, |v| v)
 }
 
 /// Integer and Enumeration values of the variables `vr[0..nvr]`.
@@ -331,7 +346,7 @@ pub unsafe extern "C" fn fmi2GetInteger(
     nvr: usize,
     value: *mut fmi2Integer,
 ) -> fmi2Status {
-    get_values(c, "fmi2GetInteger", vr, nvr, value, Kind::Integer, |v| {
+    get_values(c, "fmi2GetInteger", vr, nvr, value, Access::Integer, |v| {
         v as fmi2Integer
     })
 }
@@ -344,7 +359,7 @@ pub unsafe extern "C" fn fmi2GetBoolean(
     nvr: usize,
     value: *mut fmi2Boolean,
 ) -> fmi2Status {
-    get_values(c, "fmi2GetBoolean", vr, nvr, value, Kind::Boolean, |v| {
+    get_values(c, "fmi2GetBoolean", vr, nvr, value, Access::Boolean, |v| {
         if v != 0.0 {
             fmi2True
         } else {
@@ -361,9 +376,15 @@ pub unsafe extern "C" fn fmi2GetString(
     nvr: usize,
     value: *mut fmi2String,
 ) -> fmi2Status {
-    get_values(c, "fmi2GetString", vr, nvr, value, Kind::String, |_| {
-        ptr::null()
-    })
+    get_values(
+        c,
+        "fmi2GetString",
+        vr,
+        nvr,
+        value,
+        Access::Absent("String"),
+        |_| ptr::null(),
+    )
 }
 
 /// Sets Real parameters or inputs (SI units, checked against their ranges; all or none).
@@ -374,7 +395,7 @@ pub unsafe extern "C" fn fmi2SetReal(
     nvr: usize,
     value: *const fmi2Real,
 ) -> fmi2Status {
-    set_values(c, "fmi2SetReal", vr, nvr, value, Kind::Real, |v| v)
+    set_values(c, "fmi2SetReal", vr, nvr, value, Access::Real, |v| v)
 }
 
 /// Sets Integer or Enumeration parameters (checked against their ranges; all or none).
@@ -391,7 +412,7 @@ pub unsafe extern "C" fn fmi2SetInteger(
         vr,
         nvr,
         value,
-        Kind::Integer,
+        Access::Integer,
         f64::from,
     )
 }
@@ -410,7 +431,7 @@ pub unsafe extern "C" fn fmi2SetBoolean(
         vr,
         nvr,
         value,
-        Kind::Boolean,
+        Access::Boolean,
         f64::from,
     )
 }
@@ -423,9 +444,15 @@ pub unsafe extern "C" fn fmi2SetString(
     nvr: usize,
     value: *const fmi2String,
 ) -> fmi2Status {
-    set_values(c, "fmi2SetString", vr, nvr, value, Kind::String, |_| {
-        f64::NAN
-    })
+    set_values(
+        c,
+        "fmi2SetString",
+        vr,
+        nvr,
+        value,
+        Access::Absent("String"),
+        |_| f64::NAN,
+    )
 }
 
 // ---- FMU states ----
@@ -444,7 +471,7 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
 }
 
 /// Puts `snap` into the state `*slot` (reused when non-NULL, else a new one).
-fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot) -> Outcome {
+pub(crate) fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot) -> Outcome {
     if slot.is_null() {
         *slot = inst.register(snap);
     } else {
@@ -771,7 +798,7 @@ pub unsafe extern "C" fn fmi2SetContinuousStates(
 }
 
 /// Copies `values` (`n` of them) into the host array `dst` (NULL refused unless `n` is 0).
-unsafe fn write_array(
+pub(crate) unsafe fn write_array(
     dst: *mut fmi2Real,
     n: usize,
     what: &str,
@@ -850,8 +877,9 @@ mod tests {
         let inst = Instance::new(
             c"t".into(),
             Interface::CoSimulation,
+            Api::Fmi2,
             ptr::null_mut(),
-            None,
+            Logger::Fmi2(None),
             false,
         );
         let c: fmi2Component = Box::into_raw(Box::new(inst)).cast();

@@ -2,7 +2,10 @@
 //! C functions do after their arguments became Rust values; no shared state between instances.
 //!
 //! A refused call (illegal in the current state, bad argument or value) returns an error message,
-//! which the export logs and turns into `fmi2Error`; the instance is left as it was.
+//! which the export logs and turns into `fmi2Error`/`fmi3Error`; the instance is left as it was.
+//! One instance type serves FMI 2.0 (`exports.rs`) and FMI 3.0 (`exports3.rs`): the versions
+//! differ in the logger, the names of their functions and, for FMI 3.0 co-simulation, event mode
+//! and early return ([`Api`]).
 
 use std::collections::HashSet;
 use std::ffi::CString;
@@ -10,7 +13,8 @@ use std::ffi::CString;
 use bistable_core::Event;
 
 use crate::fmi2::*;
-use crate::md::{cat, var, Causality, Kind, CATEGORIES, NUMBER_OF_EVENT_INDICATORS, STATES, VARS};
+use crate::fmi3::fmi3LogMessageCallback;
+use crate::md::{cat, var, Causality, Kind, CATEGORIES, EVENT_INDICATORS, STATES, VARS};
 use crate::me::Me;
 use crate::model::{
     Model, PlateInputs, StepFailure, MAX_CLOCK_SPAN, MAX_PLATE_ORDER, MAX_STEP_SPAN,
@@ -27,8 +31,55 @@ pub enum Interface {
     CoSimulation,
 }
 
-/// FMI 2.0 states of both interfaces (co-simulation steps are synchronous: no
-/// `stepInProgress`/`stepCanceled`).
+/// Which FMI version drives an instance, and how (fixed at instantiation).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Api {
+    /// FMI 2.0.
+    Fmi2,
+    /// FMI 3.0. Co-simulation: `event_mode` (`eventModeUsed`: events are reported for event
+    /// mode) and `early_return` (`earlyReturnAllowed`: `fmi3DoStep` stops at each event); both
+    /// false for Model Exchange.
+    Fmi3 {
+        /// `eventModeUsed`.
+        event_mode: bool,
+        /// `earlyReturnAllowed`.
+        early_return: bool,
+    },
+}
+
+impl Api {
+    /// `"fmi2"` or `"fmi3"`, the prefix of the version's function names.
+    pub fn prefix(self) -> &'static str {
+        match self {
+            Api::Fmi2 => "fmi2",
+            Api::Fmi3 { .. } => "fmi3",
+        }
+    }
+
+    /// FMI 3.0 co-simulation with event mode.
+    pub fn event_mode(self) -> bool {
+        matches!(
+            self,
+            Api::Fmi3 {
+                event_mode: true,
+                ..
+            }
+        )
+    }
+}
+
+/// The host's logging callback.
+#[derive(Debug, Clone, Copy)]
+pub enum Logger {
+    /// FMI 2.0: variadic `(env, instanceName, status, category, format, ...)`.
+    Fmi2(fmi2CallbackLogger),
+    /// FMI 3.0: `(env, status, category, message)`.
+    Fmi3(fmi3LogMessageCallback),
+}
+
+/// Lifecycle states of both interfaces and versions (co-simulation steps are synchronous: no
+/// `stepInProgress`/`stepCanceled`). FMI 3.0's Step Mode is `StepComplete`; its co-simulation
+/// Event Mode (with `eventModeUsed`) is `EventMode`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Lifecycle {
     /// After `fmi2Instantiate` or `fmi2Reset`.
@@ -43,7 +94,9 @@ pub enum Lifecycle {
     Terminated,
     /// After an internal fault.
     Error,
-    /// Model Exchange: after `fmi2ExitInitializationMode` or `fmi2EnterEventMode`.
+    /// Model Exchange: after `fmi2ExitInitializationMode` or `fmi2EnterEventMode`; FMI 3.0
+    /// co-simulation with event mode: after `fmi3ExitInitializationMode`, or
+    /// `fmi3EnterEventMode` after a step.
     EventMode,
     /// Model Exchange: after `fmi2EnterContinuousTimeMode`.
     ContinuousTimeMode,
@@ -106,6 +159,15 @@ pub mod allowed {
     pub const ME_GET: Mask = bit(InitializationMode) | ME_RUN | AFTER_INIT | ME;
     /// `fmi2GetNominalsOfContinuousStates` (Model Exchange).
     pub const NOMINALS: Mask = bit(Instantiated) | ME_GET;
+    /// `fmi3EnterEventMode`: Model Exchange as in FMI 2.0; co-simulation (with event mode)
+    /// after a step.
+    pub const ENTER_EVENT3: Mask = ME_RUN | bit(StepComplete) | BOTH;
+    /// `fmi3UpdateDiscreteStates` (both interfaces).
+    pub const EVENT3: Mask = bit(EventMode) | BOTH;
+    /// `fmi3EnterStepMode` (co-simulation).
+    pub const ENTER_STEP: Mask = bit(EventMode) | CS;
+    /// `fmi3GetNumberOf*` (Model Exchange).
+    pub const COUNTS: Mask = !CS;
 
     /// Whether `l` is in `mask`.
     pub fn contains(mask: Mask, l: Lifecycle) -> bool {
@@ -121,6 +183,63 @@ pub mod allowed {
     }
 }
 
+/// The value type of a get or set function, and which variables it reaches.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Access {
+    /// `fmi2Real`, `fmi3Float64`: Real variables.
+    Real,
+    /// `fmi2Integer`: Integer and Enumeration variables.
+    Integer,
+    /// `fmi3Int32`: Integer variables.
+    Int32,
+    /// `fmi3Int64`: Enumeration variables.
+    Int64,
+    /// `fmi2Boolean`, `fmi3Boolean`: Boolean variables.
+    Boolean,
+    /// A type the model has no variable of (its name, e.g. `"String"`).
+    Absent(&'static str),
+}
+
+impl Access {
+    /// Whether a variable `v` is read and written with this type.
+    fn reaches(self, v: &crate::md::Var) -> bool {
+        match self {
+            Access::Real => v.kind == Kind::Real,
+            Access::Integer => v.kind == Kind::Integer,
+            Access::Int32 => v.kind == Kind::Integer && !v.enumeration,
+            Access::Int64 => v.enumeration,
+            Access::Boolean => v.kind == Kind::Boolean,
+            Access::Absent(_) => false,
+        }
+    }
+
+    /// How a variable `v` is accessed, for messages.
+    fn of(v: &crate::md::Var, api: Api) -> &'static str {
+        match (v.kind, v.enumeration, api) {
+            (Kind::Real, _, Api::Fmi2) => "Real",
+            (Kind::Real, _, Api::Fmi3 { .. }) => "Float64",
+            (Kind::Integer, false, Api::Fmi2) => "Integer",
+            (Kind::Integer, false, Api::Fmi3 { .. }) => "Int32",
+            (_, true, Api::Fmi2) => "an Enumeration (Integer)",
+            (_, true, Api::Fmi3 { .. }) => "an Enumeration (Int64)",
+            (Kind::Boolean, ..) => "Boolean",
+            (Kind::String, ..) => "String",
+        }
+    }
+
+    /// The type's name, for messages.
+    fn name(self) -> &'static str {
+        match self {
+            Access::Real => "Real/Float64",
+            Access::Integer => "Integer",
+            Access::Int32 => "Int32",
+            Access::Int64 => "Int64",
+            Access::Boolean => "Boolean",
+            Access::Absent(name) => name,
+        }
+    }
+}
+
 /// Marks a live instance (a cheap check against stray handles).
 const MAGIC: u64 = 0x6269_7374_6162_6c65;
 
@@ -132,11 +251,13 @@ pub struct Instance {
     magic: u64,
     name: CString,
     env: fmi2ComponentEnvironment,
-    logger: fmi2CallbackLogger,
+    logger: Logger,
     logging_on: bool,
     enabled: Vec<bool>,
     /// Interface provided (fixed at instantiation).
     pub interface: Interface,
+    /// FMI version and its options (fixed at instantiation).
+    pub api: Api,
     /// Lifecycle state.
     pub lifecycle: Lifecycle,
     values: Vec<f64>,
@@ -173,13 +294,15 @@ impl Instance {
     pub fn new(
         name: CString,
         interface: Interface,
+        api: Api,
         env: fmi2ComponentEnvironment,
-        logger: fmi2CallbackLogger,
+        logger: Logger,
         logging_on: bool,
     ) -> Self {
         Self {
             magic: MAGIC,
             interface,
+            api,
             name,
             env,
             logger,
@@ -222,20 +345,31 @@ impl Instance {
         if status < fmi2Error && !wanted {
             return;
         }
-        let Some(logger) = self.logger else { return };
         let text = CString::new(msg.replace('\0', "\\0")).unwrap_or_default();
         let category = CString::new(CATEGORIES[category]).unwrap_or_default();
-        // SAFETY: the host's logger with valid NUL-terminated strings, as FMI specifies.
-        unsafe {
-            logger(
-                self.env,
-                self.name.as_ptr(),
-                status,
-                category.as_ptr(),
-                c"%s".as_ptr(),
-                text.as_ptr(),
-            )
-        };
+        match self.logger {
+            // SAFETY: the host's logger with valid NUL-terminated strings, as FMI specifies.
+            Logger::Fmi2(Some(logger)) => unsafe {
+                logger(
+                    self.env,
+                    self.name.as_ptr(),
+                    status,
+                    category.as_ptr(),
+                    c"%s".as_ptr(),
+                    text.as_ptr(),
+                )
+            },
+            // SAFETY: as above.
+            Logger::Fmi3(Some(logger)) => unsafe {
+                logger(self.env, status, category.as_ptr(), text.as_ptr())
+            },
+            Logger::Fmi2(None) | Logger::Fmi3(None) => {}
+        }
+    }
+
+    /// The name of the function `name` (without prefix) in this instance's FMI version.
+    fn func(&self, name: &str) -> String {
+        format!("{}{name}", self.api.prefix())
     }
 
     /// Logs a refusal of `func`.
@@ -333,7 +467,11 @@ impl Instance {
         self.model = Some(model);
         self.log_events();
         self.last_successful_time = self.start_time;
-        self.lifecycle = Lifecycle::StepComplete;
+        self.lifecycle = if self.api.event_mode() {
+            Lifecycle::EventMode
+        } else {
+            Lifecycle::StepComplete
+        };
         Ok(fmi2OK)
     }
 
@@ -380,27 +518,35 @@ impl Instance {
         self.derivatives_given = false;
     }
 
-    /// Index of the variable with value reference `vr` and type `kind`.
-    fn lookup(vr: fmi2ValueReference, kind: Kind) -> Result<usize, String> {
+    /// Index of the variable with value reference `vr`, read or written as `ty`.
+    fn lookup(&self, vr: fmi2ValueReference, ty: Access) -> Result<usize, String> {
         let i = VARS
             .iter()
             .position(|v| v.vr == vr)
             .ok_or_else(|| format!("unknown value reference {vr}"))?;
-        if VARS[i].kind != kind {
-            return Err(format!("{} is {:?}, not {kind:?}", label(i), VARS[i].kind));
+        if !ty.reaches(&VARS[i]) {
+            return Err(format!(
+                "{} is {}, not {}",
+                label(i),
+                Access::of(&VARS[i], self.api),
+                ty.name()
+            ));
         }
         Ok(i)
     }
 
-    /// Values of the variables `vrs` of type `kind`.
-    pub fn get(&mut self, vrs: &[fmi2ValueReference], kind: Kind) -> Result<Vec<f64>, String> {
+    /// Values of the variables `vrs`, read as `ty`.
+    pub fn get(&mut self, vrs: &[fmi2ValueReference], ty: Access) -> Result<Vec<f64>, String> {
         let idx = vrs
             .iter()
-            .map(|&vr| Self::lookup(vr, kind))
+            .map(|&vr| self.lookup(vr, ty))
             .collect::<Result<Vec<_>, _>>()?;
-        let wants_output = idx
-            .iter()
-            .any(|&i| matches!(VARS[i].causality, Causality::Output | Causality::Local));
+        let wants_output = idx.iter().any(|&i| {
+            matches!(
+                VARS[i].causality,
+                Causality::Output | Causality::Local | Causality::Independent
+            )
+        });
         if wants_output && self.outputs_stale {
             self.refresh_outputs()?;
         }
@@ -425,11 +571,11 @@ impl Instance {
         Ok(())
     }
 
-    /// Sets the variables `vrs` of type `kind` (all or none).
-    pub fn set(&mut self, vrs: &[fmi2ValueReference], vals: &[f64], kind: Kind) -> Outcome {
+    /// Sets the variables `vrs`, written as `ty` (all or none).
+    pub fn set(&mut self, vrs: &[fmi2ValueReference], vals: &[f64], ty: Access) -> Outcome {
         let mut checked = Vec::with_capacity(vrs.len());
         for (&vr, &value) in vrs.iter().zip(vals) {
-            let i = Self::lookup(vr, kind)?;
+            let i = self.lookup(vr, ty)?;
             self.check_settable(i)?;
             checked.push((i, check_range(i, value)?));
         }
@@ -452,6 +598,10 @@ impl Instance {
                 "{} is computed by the FMU and cannot be set",
                 label(i)
             )),
+            Causality::Independent => Err(format!(
+                "{} is the independent variable: the host sets the time through the step or time functions",
+                label(i)
+            )),
             Causality::Parameter if self.lifecycle == Lifecycle::ContinuousTimeMode => {
                 Err(format!(
                     "{} is a parameter: in continuous-time mode only inputs can be set (tunable parameters in event mode)",
@@ -459,8 +609,10 @@ impl Instance {
                 ))
             }
             Causality::Parameter if !v.tunable && running => Err(format!(
-                "{} is a fixed parameter: set it before fmi2ExitInitializationMode (or after fmi2Reset)",
-                label(i)
+                "{} is a fixed parameter: set it before {} (or after {})",
+                label(i),
+                self.func("ExitInitializationMode"),
+                self.func("Reset")
             )),
             _ => Ok(()),
         }
@@ -477,7 +629,7 @@ impl Instance {
     ) -> Outcome {
         let mut checked = Vec::with_capacity(vrs.len());
         for ((&vr, &order), &value) in vrs.iter().zip(orders).zip(vals) {
-            let i = Self::lookup(vr, Kind::Real)?;
+            let i = self.lookup(vr, Access::Real)?;
             let shift = match i {
                 i if i == var::z_in => 0,
                 i if i == var::zdot_in => 1,
@@ -518,12 +670,15 @@ impl Instance {
         vrs: &[fmi2ValueReference],
         orders: &[fmi2Integer],
     ) -> Result<Vec<f64>, String> {
+        let idx = vrs
+            .iter()
+            .map(|&vr| self.lookup(vr, Access::Real))
+            .collect::<Result<Vec<_>, _>>()?;
         let model = self.model.as_mut().ok_or("no model yet")?;
         model.sync()?;
-        vrs.iter()
+        idx.iter()
             .zip(orders)
-            .map(|(&vr, &order)| {
-                let i = Self::lookup(vr, Kind::Real)?;
+            .map(|(&i, &order)| {
                 if order != 1 {
                     return Err(format!(
                         "derivative order {order} of {}: only order 1 is provided",
@@ -537,7 +692,9 @@ impl Instance {
             .collect()
     }
 
-    /// `fmi2DoStep`: integrates from the current time to exactly `tc + h`.
+    /// `fmi2DoStep`/`fmi3DoStep`: integrates from the current time to exactly `tc + h`, or (FMI
+    /// 3.0 with early return) to the first event after the current time (see
+    /// [`Instance::stopped_at_event`]).
     pub fn do_step(&mut self, tc: f64, h: f64) -> Outcome {
         let Some(model) = self.model.as_mut() else {
             return Err("no model (internal state lost)".into());
@@ -558,7 +715,20 @@ impl Instance {
         if !valid {
             return Err(step_refusal(tc, h, now, self.stop_time, span, step_span));
         }
-        let result = model.step(t_end, &self.values, &self.derivatives, &mut self.events);
+        let early = matches!(
+            self.api,
+            Api::Fmi3 {
+                early_return: true,
+                ..
+            }
+        );
+        let result = model.step(
+            t_end,
+            &self.values,
+            &self.derivatives,
+            &mut self.events,
+            early,
+        );
         self.outputs_stale = true;
         if result.is_ok() && self.events.is_empty() {
             // The common case, kept short.
@@ -579,14 +749,15 @@ impl Instance {
         match result {
             Ok(()) => {
                 self.clear_derivatives();
-                self.last_successful_time = t_end;
+                // An early return ends the step at the event (`reached`, before `t_end`).
+                self.last_successful_time = reached;
                 Ok(fmi2OK)
             }
             Err(StepFailure::Stopped(msg)) => {
                 self.last_successful_time = reached;
                 self.terminated = true;
                 self.lifecycle = Lifecycle::StepFailed;
-                let msg = format!("fmi2DoStep: {msg}; stopped at t = {reached} s");
+                let msg = format!("{}: {msg}; stopped at t = {reached} s", self.func("DoStep"));
                 self.log(fmi2Discard, cat::logStatusDiscard, &msg);
                 Ok(fmi2Discard)
             }
@@ -653,12 +824,23 @@ impl Instance {
 
     /// `fmi2GetEventIndicators` (SI) for `n` indicators.
     pub fn event_indicators(&self, n: usize) -> Result<[f64; 2], String> {
-        check_count("ni", n, NUMBER_OF_EVENT_INDICATORS)?;
+        check_count("ni", n, EVENT_INDICATORS.len())?;
         Ok(self.me_now()?.indicators(&self.values))
     }
 
-    /// `fmi2EnterEventMode`.
+    /// `fmi2EnterEventMode`/`fmi3EnterEventMode`. FMI 3.0 co-simulation (with event mode):
+    /// after a step, to act on an event at its end (the event is already applied, so event mode
+    /// lets the host set inputs and tunable parameters there).
     pub fn enter_event_mode(&mut self) -> Outcome {
+        if self.interface == Interface::CoSimulation {
+            if !self.api.event_mode() {
+                return Err(
+                    "event mode was not requested at instantiation (eventModeUsed = false)".into(),
+                );
+            }
+            self.lifecycle = Lifecycle::EventMode;
+            return Ok(fmi2OK);
+        }
         self.me_mut()?.enter_event_mode();
         self.outputs_stale = true;
         self.lifecycle = Lifecycle::EventMode;
@@ -666,7 +848,13 @@ impl Instance {
     }
 
     /// `fmi2NewDiscreteStates`: settles the events at the current time (one call suffices).
+    /// FMI 3.0 co-simulation in event mode: the events at the current time were applied by the
+    /// step that reached it, so nothing changes (no time events either).
     pub fn new_discrete_states(&mut self, info: &mut fmi2EventInfo) -> Outcome {
+        if self.interface == Interface::CoSimulation {
+            *info = fmi2EventInfo::default();
+            return Ok(fmi2OK);
+        }
         let me = self.me.as_mut().ok_or("no model (internal state lost)")?;
         let up = me.update(&self.values, &mut self.events)?;
         let next = me.next_event_time();
@@ -678,6 +866,28 @@ impl Instance {
             nextEventTime: next.unwrap_or(0.0),
             ..fmi2EventInfo::default()
         };
+        Ok(fmi2OK)
+    }
+
+    /// The last step stopped at an event it reached (FMI 3.0 co-simulation with early return):
+    /// the event, at `last_successful_time`, has been applied.
+    pub fn stopped_at_event(&self) -> bool {
+        self.model.as_ref().is_some_and(|m| m.at_event)
+    }
+
+    /// Where the last step ended (s).
+    pub fn last_successful_time(&self) -> f64 {
+        self.last_successful_time
+    }
+
+    /// The FMU asks to end the simulation (after a step it could not complete).
+    pub fn terminated(&self) -> bool {
+        self.terminated
+    }
+
+    /// `fmi3EnterStepMode` (co-simulation, from event mode).
+    pub fn enter_step_mode(&mut self) -> Outcome {
+        self.lifecycle = Lifecycle::StepComplete;
         Ok(fmi2OK)
     }
 
@@ -731,6 +941,7 @@ impl Instance {
         let model = self.model.as_mut().map(Model::save).transpose()?;
         Ok(Snapshot {
             interface: self.interface,
+            api: self.api,
             me: self.me.as_ref().map(Me::save),
             lifecycle: self.lifecycle,
             values: self.values.clone(),
@@ -745,10 +956,10 @@ impl Instance {
 
     /// Checks that a snapshot fits this instance (same interface) and returns its models.
     pub fn accept(&self, s: &Snapshot) -> Result<(Option<Model>, Option<Me>), String> {
-        if s.interface != self.interface {
+        if (s.interface, s.api) != (self.interface, self.api) {
             return Err(format!(
-                "FMU state: made by a {:?} instance, this one is {:?}",
-                s.interface, self.interface
+                "FMU state: made by a {:?} instance of {:?}, this one is {:?} of {:?}",
+                s.interface, s.api, self.interface, self.api
             ));
         }
         Self::validate(s)
@@ -805,12 +1016,18 @@ impl Instance {
         if s.interface == Interface::ModelExchange {
             return Self::validate_me(s, needs_model).map(|me| (None, me));
         }
-        if s.me.is_some()
-            || matches!(
-                s.lifecycle,
-                Lifecycle::EventMode | Lifecycle::ContinuousTimeMode
-            )
-        {
+        let event_mode_ok = s.lifecycle != Lifecycle::EventMode || s.api.event_mode();
+        let early_ok = matches!(
+            s.api,
+            Api::Fmi3 {
+                early_return: true,
+                ..
+            }
+        );
+        if s.model.as_ref().is_some_and(|m| m.at_event) && !early_ok {
+            return Err("FMU state: stopped at an event without early return".into());
+        }
+        if s.me.is_some() || s.lifecycle == Lifecycle::ContinuousTimeMode || !event_mode_ok {
             return Err(format!(
                 "FMU state: a Model Exchange model or state {:?} in a co-simulation state",
                 s.lifecycle
@@ -838,6 +1055,14 @@ impl Instance {
         let cs_only = matches!(s.lifecycle, Lifecycle::StepComplete | Lifecycle::StepFailed)
             || s.model.is_some()
             || s.terminated
+            || !matches!(
+                s.api,
+                Api::Fmi2
+                    | Api::Fmi3 {
+                        event_mode: false,
+                        early_return: false
+                    }
+            )
             || s.inputs.iter().any(Option::is_some);
         if cs_only {
             return Err(format!(
@@ -969,7 +1194,7 @@ fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>, span: f64, step_sp
         )
     } else if step_span > MAX_STEP_SPAN {
         format!(
-            "the step from {} s to {} s spans {step_span:e} shaker radians (time units when Omega < 1), more than {MAX_STEP_SPAN:e} in one fmi2DoStep: its cost grows with its length, split it into shorter steps",
+            "the step from {} s to {} s spans {step_span:e} shaker radians (time units when Omega < 1), more than {MAX_STEP_SPAN:e} in one step: its cost grows with its length, split it into shorter steps",
             Num(now),
             Num(t_end)
         )

@@ -7,7 +7,9 @@
 //! `build.rs`). Every export catches panics and checks its arguments; see `fmu/README.md`.
 
 pub mod exports;
+pub mod exports3;
 pub mod fmi2;
+pub mod fmi3;
 pub mod instance;
 pub mod md;
 pub mod me;

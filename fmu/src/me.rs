@@ -27,7 +27,7 @@
 
 use std::ops::ControlFlow;
 
-use bistable_core::potential::{self, BARRIER};
+use bistable_core::potential;
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Observer, Params, PlateMotion, Simulator,
     Sinusoid, SolverOptions, State, StepView, StickCause, Well,
@@ -345,13 +345,7 @@ impl Me {
 
     /// `fmi2GetEventIndicators` (SI): gap (m) or contact force (m/s²), and `x − Δx/2` (m).
     pub fn indicators(&self, values: &[f64]) -> [f64; 2] {
-        let (z, zd, zdd) = self.plate(values);
-        let sc = &self.scale;
-        let contact = match self.s.contact {
-            ContactMode::Free => sc.length(self.s.x - z),
-            ContactMode::Sticking => sc.acceleration(self.params.contact_force(z, zd, zdd)),
-        };
-        [contact, sc.length(self.s.x - BARRIER)]
+        self.observed(values).indicators(&self.scale)
     }
 
     /// Whether the states have moved where event mode must act (`fmi2CompletedIntegratorStep`

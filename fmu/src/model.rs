@@ -183,6 +183,9 @@ pub struct Model {
     /// Momentum per unit mass given to the plate by the impacts of the last step,
     /// `Σ (v_before − v_after)` (units of `ω0 Δx`).
     pub impulse: f64,
+    /// The last step stopped at an event (early return): `time` is the event's time (before
+    /// the requested end, or that end) and the event has been applied.
+    pub at_event: bool,
 }
 
 /// Collects the events of an advance and the end of the last Taylor step computed.
@@ -193,6 +196,10 @@ struct Collect<'a> {
     steps: u64,
     /// Most steps this advance may compute (see [`step_budget`]).
     budget: u64,
+    /// Stop the advance at the first event (early return).
+    stop_at_events: bool,
+    /// The advance was stopped at an event because of `stop_at_events`.
+    stopped: bool,
 }
 
 /// Most Taylor steps a step spanning `radians` (`max(Ω, 1)·Δτ`) may compute: beyond it the
@@ -210,6 +217,9 @@ impl Observer for Collect<'_> {
     fn event(&mut self, e: &Event) -> ControlFlow<()> {
         self.events.push(*e);
         if self.steps > self.budget {
+            ControlFlow::Break(())
+        } else if self.stop_at_events {
+            self.stopped = true;
             ControlFlow::Break(())
         } else {
             ControlFlow::Continue(())
@@ -306,6 +316,8 @@ impl Model {
             taylor_end: &mut taylor_end,
             steps: 0,
             budget: step_budget(0.0),
+            stop_at_events: false,
+            stopped: false,
         };
         sim.advance_to(tau0, &mut obs)
             .map_err(|e| describe(&e, &scale))?;
@@ -320,6 +332,7 @@ impl Model {
             taylor_end,
             history: SampleHistory::new(),
             impulse: impulse_of(events),
+            at_event: false,
         })
     }
 
@@ -398,6 +411,7 @@ impl Model {
             taylor_end: f64::NEG_INFINITY,
             history,
             impulse: saved.impulse,
+            at_event: saved.at_event,
         };
         model.check_physical(values)?;
         Ok(model)
@@ -466,12 +480,15 @@ impl Model {
             time: self.time,
             history: self.history.entries().collect(),
             impulse: self.impulse,
+            at_event: self.at_event,
         })
     }
 
     /// Integrates from the current time to exactly `t_end` (s), continuing the trajectory (no
     /// restart) unless the plate changes: a tunable `Omega`/`V` change, or, in external mode, the
-    /// piece built from the inputs. Events go to `events`.
+    /// piece built from the inputs. Events go to `events`. With `stop_at_events` (early return)
+    /// the step ends at the first event after the current time (applied, `at_event` set) if
+    /// that is before `t_end`; the next step continues from there as if it had not stopped.
     #[inline]
     pub fn step(
         &mut self,
@@ -479,17 +496,19 @@ impl Model {
         values: &[f64],
         derivatives: &PlateInputs,
         events: &mut Vec<Event>,
+        stop_at_events: bool,
     ) -> Result<(), StepFailure> {
         let (tau_end, _, same_plate) = self.plan(t_end, values);
         // The impulse is replaced only by a step that is not refused (a refusal leaves the
-        // model as it was).
+        // model as it was). No event lies before the end of the current Taylor step.
         if same_plate && tau_end < self.taylor_end {
             self.impulse = 0.0;
+            self.at_event = false;
             self.pending = Some(tau_end);
             self.time = t_end;
             return Ok(());
         }
-        self.step_core(t_end, values, derivatives, events)
+        self.step_core(t_end, values, derivatives, events, stop_at_events)
     }
 
     /// What a step to `t_end` (s) asks for: the end in core time `τ`, the requested `(Ω, V)`,
@@ -508,6 +527,7 @@ impl Model {
         values: &[f64],
         derivatives: &PlateInputs,
         events: &mut Vec<Event>,
+        stop_at_events: bool,
     ) -> Result<(), StepFailure> {
         let (tau_end, wanted, same_plate) = self.plan(t_end, values);
         self.sync().map_err(StepFailure::Refused)?;
@@ -517,6 +537,7 @@ impl Model {
             // A step shorter than the resolution of the core's time (e.g. h = 5e-324 s, or
             // omega0 < 1): nothing moves, only the communication time.
             self.impulse = 0.0;
+            self.at_event = false;
             self.time = t_end;
             return Ok(());
         }
@@ -588,15 +609,24 @@ impl Model {
             taylor_end: &mut self.taylor_end,
             steps: 0,
             budget: step_budget(radians),
+            stop_at_events,
+            stopped: false,
         };
         let obs_budget = obs.budget;
         let first_event = obs.events.len();
         let advanced = self.sim.advance(tau_end, &mut obs);
+        let at_event = obs.stopped;
         self.impulse = impulse_of(&events[first_event..]);
-        // Stopped by the observer: the work budget is spent.
-        let over_budget = matches!(advanced, Ok(false));
+        // Stopped by the observer for another reason than an early return: the work budget is
+        // spent.
+        let over_budget = matches!(advanced, Ok(false)) && !at_event;
+        // An event exactly at the end is not an early return (the rest of the instant's events
+        // come with the next step).
+        let early = at_event && self.sim.instant() < Instant::new(tau_end);
+        self.at_event = at_event;
         let result = match advanced {
             Ok(true) => Ok(()),
+            Ok(false) if at_event => Ok(()),
             Ok(false) => Err(SimError::NonFinite { t: self.sim.time() }),
             Err(e) => Err(e),
         };
@@ -608,13 +638,17 @@ impl Model {
         });
         match result {
             Ok(()) => {
-                self.time = t_end;
+                self.time = if early {
+                    self.scale.time(self.sim.time()).min(t_end)
+                } else {
+                    t_end
+                };
                 Ok(())
             }
             Err(e @ (SimError::Zeno { .. } | SimError::NonFinite { .. })) => {
                 let msg = if over_budget {
                     format!(
-                        "more than {} integration steps in one fmi2DoStep at t = {} s: the state is far outside the model's scope",
+                        "more than {} integration steps in one step at t = {} s: the state is far outside the model's scope",
                         obs_budget,
                         self.scale.time(self.sim.time())
                     )
@@ -622,6 +656,7 @@ impl Model {
                     describe(&e, &self.scale)
                 };
                 self.time = self.scale.time(self.sim.time());
+                self.at_event = false;
                 // Where the core stopped is kept only if it is a usable state (a solution that
                 // overflowed may leave huge velocities whose energies are infinite, or a mass
                 // that crossed the barrier inside the failed step); otherwise the model goes back
@@ -767,6 +802,7 @@ impl Observed<'_> {
         let count = |n: u64| n.min(i32::MAX as u64) as f64;
         let a = mass_acceleration(self.params, st, self.zddot);
         let riding = st.mode == ContactMode::Sticking;
+        values[var::time] = s.time(st.t);
         values[var::x] = s.length(st.x);
         values[var::v] = s.velocity(st.v);
         values[var::der_x] = s.velocity(if riding { st.zdot } else { st.v });
@@ -795,6 +831,23 @@ impl Observed<'_> {
         values[var::last_impact_v_after] = va;
         values[var::last_impact_delta_k] = dk;
         values[var::plate_impulse] = s.mass * s.velocity(self.impulse);
+        [
+            values[var::contact_indicator],
+            values[var::barrier_indicator],
+        ] = self.indicators(s);
+    }
+
+    /// The event indicators (SI): the gap `x − z` (m) in free flight or the contact force per
+    /// unit mass (m/s², Eq. 9) while sticking, and `x − Δx/2` (m).
+    pub fn indicators(&self, s: &Scale) -> [f64; 2] {
+        let st = &self.state;
+        let contact = match st.mode {
+            ContactMode::Free => s.length(st.x - st.z),
+            ContactMode::Sticking => {
+                s.acceleration(self.params.contact_force(st.z, st.zdot, self.zddot))
+            }
+        };
+        [contact, s.length(st.x - potential::BARRIER)]
     }
 }
 
@@ -1034,6 +1087,8 @@ pub struct SavedModel {
     pub history: Vec<(Sample, bool)>,
     /// Momentum per unit mass given to the plate in the last step (see [`Model::impulse`]).
     pub impulse: f64,
+    /// The last step stopped at an event (see [`Model::at_event`]).
+    pub at_event: bool,
 }
 
 /// The plate over `[start, end]` (τ) from the inputs: their Taylor polynomial at the step start
@@ -1099,7 +1154,9 @@ mod tests {
         let mut events = Vec::new();
         let none = [None; MAX_PLATE_ORDER + 1];
         let mut m = Model::start(&values, &none, 0.0, &mut events).unwrap();
-        m.step(3.0, &values, &none, &mut events).ok().unwrap();
+        m.step(3.0, &values, &none, &mut events, false)
+            .ok()
+            .unwrap();
         let outputs: Vec<usize> = (0..VARS.len())
             .filter(|&i| VARS[i].causality == Causality::Output)
             .collect();

@@ -2,7 +2,8 @@
 //!
 //! Layout (little endian): magic `BIFMUST\0` (8 bytes), format version `u32`, total length `u64`,
 //! guid (`u32` length + bytes), the fields below in order, and an FNV-1a 64 checksum of all bytes
-//! before it. Options are a `u8` tag (0/1) followed by the value; enums are `u8` tags. Decoding
+//! before it. Options are a `u8` tag (0/1) followed by the value; enums are `u8` tags; the FMI
+//! version is a tag (0: 2.0, 1: 3.0) and, for 3.0, the event-mode and early-return flags. Decoding
 //! refuses a wrong magic, version, length, checksum or guid, truncation, unknown tags and
 //! trailing bytes; the instance then checks the values themselves (ranges, core checkpoint).
 //! The field writer and reader and the layout of the core checkpoint inside are
@@ -14,7 +15,7 @@ use bistable_core::codec::{
 use bistable_core::sampled::MAX_SAMPLES;
 use bistable_core::{ContactMode, Instant, Sample, Well};
 
-use crate::instance::{Interface, Lifecycle};
+use crate::instance::{Api, Interface, Lifecycle};
 use crate::md::GUID;
 use crate::me::{SavedMe, Tail};
 use crate::model::{PlateInputs, SavedModel, MAX_PLATE_ORDER};
@@ -22,13 +23,15 @@ use crate::model::{PlateInputs, SavedModel, MAX_PLATE_ORDER};
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"BIFMUST\0";
 /// Format version; bump on any layout change.
-pub const VERSION: u32 = 3;
+pub const VERSION: u32 = 4;
 
 /// Everything an instance needs to continue exactly from a saved point.
 #[derive(Debug, Clone, PartialEq)]
 pub struct Snapshot {
     /// Interface of the instance that made it (only such an instance accepts it).
     pub interface: Interface,
+    /// FMI version and options of the instance that made it (likewise).
+    pub api: Api,
     /// Lifecycle state.
     pub lifecycle: Lifecycle,
     /// Values of all variables (SI), in model-description order.
@@ -74,6 +77,17 @@ impl Snapshot {
         w.u32(GUID.len() as u32);
         w.0.extend_from_slice(GUID.as_bytes());
         w.u8(index_of(&INTERFACES, &self.interface));
+        match self.api {
+            Api::Fmi2 => w.u8(0),
+            Api::Fmi3 {
+                event_mode,
+                early_return,
+            } => {
+                w.u8(1);
+                w.u8(u8::from(event_mode));
+                w.u8(u8::from(early_return));
+            }
+        }
         w.u8(index_of(&LIFECYCLES, &self.lifecycle));
         w.u32(self.values.len() as u32);
         self.values.iter().for_each(|&v| w.f64(v));
@@ -95,6 +109,7 @@ impl Snapshot {
             }
             w.f64(m.impulse);
             w.f64(m.time);
+            w.u8(u8::from(m.at_event));
         });
         w.opt(self.me.as_ref(), put_me);
         let total = (w.0.len() + 8) as u64;
@@ -135,6 +150,13 @@ impl Snapshot {
             ));
         }
         let interface = INTERFACES[usize::from(r.tag("interface", INTERFACES.len() as u8)?)];
+        let api = match r.tag("FMI version", 2)? {
+            0 => Api::Fmi2,
+            _ => Api::Fmi3 {
+                event_mode: r.bool("event mode")?,
+                early_return: r.bool("early return")?,
+            },
+        };
         let lifecycle = LIFECYCLES[usize::from(r.tag("lifecycle", LIFECYCLES.len() as u8)?)];
         let n = r.u32()? as usize;
         if n != crate::md::VARS.len() {
@@ -150,6 +172,7 @@ impl Snapshot {
         }
         let snap = Snapshot {
             interface,
+            api,
             lifecycle,
             values,
             inputs,
@@ -165,6 +188,7 @@ impl Snapshot {
                     history: get_history(r)?,
                     impulse: r.f64()?,
                     time: r.f64()?,
+                    at_event: r.bool("at event")?,
                 })
             })?,
             me: r.opt("Model Exchange state", get_me)?,
@@ -274,9 +298,12 @@ mod tests {
             let inputs = [None, None, Some(-0.1), None, None, Some(1e-3)];
             let mut events = Vec::new();
             let mut m = Model::start(&values, &inputs, 0.0, &mut events).unwrap();
-            m.step(t_end, &values, &inputs, &mut events).ok().unwrap();
+            m.step(t_end, &values, &inputs, &mut events, false)
+                .ok()
+                .unwrap();
             out.push(Snapshot {
                 interface: Interface::CoSimulation,
+                api: Api::Fmi2,
                 me: None,
                 lifecycle: Lifecycle::StepComplete,
                 values,

@@ -118,8 +118,11 @@ static void parse_vars(void) {
         attr(p, end, "valueReference", b, sizeof b);
         v->vr = (fmi2ValueReference)strtoul(b, NULL, 10);
         attr(p, end, "causality", b, sizeof b);
-        /* Local variables (the state derivatives der_x, der_v) are computed like outputs. */
-        v->caus = strcmp(b, "output") == 0 || strcmp(b, "local") == 0 ? C_OUTPUT
+        /* Local variables (state derivatives, event indicators) and the independent variable
+           (time) are computed like outputs. */
+        v->caus = strcmp(b, "output") == 0 || strcmp(b, "local") == 0 ||
+                          strcmp(b, "independent") == 0
+                      ? C_OUTPUT
                   : strcmp(b, "input") == 0                           ? C_INPUT
                                                                       : C_PARAM;
         v->tunable = attr(p, end, "variability", b, sizeof b) && strcmp(b, "tunable") == 0;
