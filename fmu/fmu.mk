@@ -2,7 +2,7 @@
 #   make fmu            target/fmu/bistable_impact.fmu (FMI 2.0) and bistable_impact_fmi3.fmu (FMI 3.0):
 #                       one release build of the binary, which exports both APIs; the FMI 3.0
 #                       modelDescription.xml is generated from the FMI 2.0 one
-#   make test-fmu       C host (cbindgen header, dlopen) + fmpy validate + pytest tests/fmu
+#   make test-fmu       C host (cbindgen header, dlopen) + fmpy validate (both FMUs) + pytest tests/fmu
 #   make fmu-reference  regenerate the co-simulation regression CSVs in tests/fmu/reference/
 #   make fmu-guid       rewrite the guid of modelDescription.xml after editing it
 #   make fmu-bench      cost per fmi2DoStep (C host) and fmpy simulate wall time
@@ -63,6 +63,7 @@ test-fmu: setup fmu fmu-host
 	$(FMU_HOST) test $(FMU_SO) modelDescription.xml
 	FUZZ_QUIET=1 $(FMU_HOST) fuzz $(FMU_SO) modelDescription.xml $(FMU_FUZZ_QUICK)
 	.venv/bin/fmpy validate $(FMU)
+	.venv/bin/fmpy validate $(FMU3)
 	$(VENV_PY) -m pytest -q tests/fmu
 
 fmu-reference: setup fmu

@@ -1,4 +1,6 @@
 """The packaged FMU: fmpy's validation, archive layout, exported symbols, guid."""
+import pathlib
+import re
 import subprocess
 import sys
 import zipfile
@@ -35,13 +37,20 @@ def test_archive_layout_and_model_description(fmu_path):
         assert b"<h1>bistable_impact</h1>" in z.read("documentation/index.html")
 
 
-def test_only_the_44_fmi2_functions_are_exported(unzipped):
-    assert len(FMI2_FUNCTIONS) == 44
+def fmi3_functions():
+    """Every function of the FMI 3.0 standard, from its header (shipped with fmpy)."""
+    import fmpy
+    header = pathlib.Path(fmpy.__file__).parent / "c-code" / "fmi3FunctionTypes.h"
+    return sorted(set(re.findall(r"\b(fmi3\w+)TYPE\b", header.read_text())))
+
+
+def test_exactly_the_44_fmi2_and_75_fmi3_functions_are_exported(unzipped):
+    assert len(FMI2_FUNCTIONS) == 44 and len(fmi3_functions()) == 75
     so = f"{unzipped}/binaries/linux64/bistable_impact.so"
     out = subprocess.run(["nm", "-D", "--defined-only", so], capture_output=True, text=True,
                          check=True).stdout
     exported = sorted(line.split()[-1] for line in out.splitlines() if line.strip())
-    assert exported == FMI2_FUNCTIONS
+    assert exported == sorted(FMI2_FUNCTIONS + fmi3_functions())
 
 
 def test_guid_is_derived_from_the_model_description(md):

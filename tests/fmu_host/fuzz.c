@@ -1555,10 +1555,10 @@ static int layout(const unsigned char *b, size_t n, Layout *L) {
     uint32_t g;
     memcpy(&g, b + 20, 4);
     size_t p = 24 + g;
-    /* interface byte, lifecycle byte, u32 count, values */
-    if (p + 6 + 8 * (size_t)nv >= n) return 0;
-    L->life = p + 1;
-    L->vals = p + 6;
+    /* interface byte, FMI version byte (0: 2.0), lifecycle byte, u32 count, values */
+    if (p + 7 + 8 * (size_t)nv >= n || b[p + 1] != 0) return 0;
+    L->life = p + 2;
+    L->vals = p + 7;
     p = L->vals + 8 * (size_t)nv;
     for (int k = 0; k < 6; k++) {
         if (p >= n) return 0;
@@ -1578,9 +1578,10 @@ static int layout(const unsigned char *b, size_t n, Layout *L) {
     if (p >= n) return 0;
     L->has_model = b[p];
     L->model = p + 1;
-    /* A co-simulation state ends with the absent Model Exchange part (tag 0) before the checksum. */
-    L->end = n - 9;
-    return L->model <= L->end && b[L->end] == 0;
+    /* A co-simulation state ends with the model's at-event flag and the absent Model Exchange part
+       (tag 0) before the checksum; `end` is the end of the model's time field. */
+    L->end = n - 10;
+    return L->model <= L->end && b[n - 9] == 0;
 }
 
 static uint64_t fnv(const unsigned char *b, size_t n) {
