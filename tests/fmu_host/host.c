@@ -28,8 +28,9 @@ int load(const char *path) {
     }                                                                \
     count++;
     FMI_FUNCTIONS(LOAD)
-#undef LOAD
     printf("loaded %d of %d fmi2 functions\n", count - missing, count);
+    FMI3_BENCH_FUNCTIONS(LOAD)
+#undef LOAD
     return missing ? -1 : 0;
 }
 
@@ -442,6 +443,52 @@ static double timed_inputs(double t_end, double h, int reps, int external) {
     return best;
 }
 
+/* Wall time of the baseline over [0, t_end] with fmi3DoStep steps of size h (FMI 3.0
+ * co-simulation; `early`: earlyReturnAllowed and eventModeUsed, every event an early return
+ * followed by event mode), best of `reps`; `*returns` counts the early returns. */
+static double timed3(double t_end, double h, int reps, int early, long *returns) {
+    double best = INFINITY;
+    for (int r = 0; r < reps; r++) {
+        fmi3Instance c = F.fmi3InstantiateCoSimulation("bench", guid, NULL, false, false, early,
+                                                       early, NULL, 0, NULL, NULL, NULL);
+        bool need = false, term = false, ret = false, defined = false, changed = false;
+        double last = 0.0, next_event = 0.0;
+        if (!c || F.fmi3EnterInitializationMode(c, false, 0, 0.0, false, 0) != fmi3OK ||
+            F.fmi3ExitInitializationMode(c) != fmi3OK ||
+            (early && (F.fmi3UpdateDiscreteStates(c, &need, &term, &changed, &changed, &defined,
+                                                  &next_event) != fmi3OK ||
+                       F.fmi3EnterStepMode(c) != fmi3OK))) {
+            fprintf(stderr, "bench: cannot start the FMI 3.0 instance\n");
+            exit(1);
+        }
+        long n = (long)(t_end / h + 0.5);
+        *returns = 0;
+        double t0 = now(), t = 0.0;
+        for (long k = 1; k <= n; k++) {
+            double next = (double)k * h;
+            while (t < next) {
+                if (F.fmi3DoStep(c, t, next - t, true, &need, &term, &ret, &last) != fmi3OK) {
+                    fprintf(stderr, "bench: fmi3DoStep failed at t = %g\n", t);
+                    exit(1);
+                }
+                t = ret ? last : next;
+                *returns += ret;
+                if (need && (F.fmi3EnterEventMode(c) != fmi3OK ||
+                             F.fmi3UpdateDiscreteStates(c, &need, &term, &changed, &changed,
+                                                        &defined, &next_event) != fmi3OK ||
+                             F.fmi3EnterStepMode(c) != fmi3OK)) {
+                    fprintf(stderr, "bench: event mode failed at t = %g\n", t);
+                    exit(1);
+                }
+            }
+        }
+        double dt = now() - t0;
+        best = dt < best ? dt : best;
+        F.fmi3FreeInstance(c);
+    }
+    return best;
+}
+
 static void bench(void) {
     const double t_end = 1000.0, h = 0.01;
     timed(t_end, h, 1, 0); /* warm up */
@@ -460,6 +507,13 @@ static void bench(void) {
     printf("bench: h=%g sampled inputs, external mode (Hermite plate): %.3f ms, %.1f ns per step, "
            "ratio to internal %.2f\n",
            h, sampled * 1e3, sampled / (double)steps * 1e9, sampled / internal);
+    long returns = 0;
+    double fmi3 = timed3(t_end, h, 7, 0, &returns), early = timed3(t_end, h, 7, 1, &returns);
+    printf("bench: h=%g fmi3DoStep: %.3f ms, %.1f ns per step, ratio to fmi2DoStep %.2f\n", h,
+           fmi3 * 1e3, fmi3 / (double)steps * 1e9, fmi3 / small);
+    printf("bench: h=%g fmi3DoStep with early return and event mode: %.3f ms for %ld steps and "
+           "%ld early returns (each followed by event mode), ratio to fmi2DoStep %.2f\n",
+           h, early * 1e3, steps, returns, early / small);
 }
 
 int main(int argc, char **argv) {

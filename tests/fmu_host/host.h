@@ -31,15 +31,24 @@
     X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                                     \
     X(fmi2GetNominalsOfContinuousStates)
 
+/* The FMI 3.0 functions `host bench` times against fmi2DoStep (the FMI 3.0 host of
+ * tests/fmu_host/fmi3 tests the whole FMI 3.0 interface). */
+#define FMI3_BENCH_FUNCTIONS(X)                                                               \
+    X(fmi3InstantiateCoSimulation) X(fmi3EnterInitializationMode)                             \
+    X(fmi3ExitInitializationMode) X(fmi3EnterStepMode) X(fmi3EnterEventMode)                 \
+    X(fmi3UpdateDiscreteStates) X(fmi3DoStep) X(fmi3FreeInstance)
+
 struct fmi_table {
 #define FIELD(f) __typeof__(&f) f;
     FMI_FUNCTIONS(FIELD)
+    FMI3_BENCH_FUNCTIONS(FIELD)
 #undef FIELD
 };
 
 /* The loaded functions (host.c). */
 extern struct fmi_table F;
-/* Loads every fmi2 function from the library at `path`; 0 on success. */
+/* Loads every fmi2 function (and the FMI 3.0 ones of the bench) from the library at `path`; 0 on
+ * success. */
 int load(const char *path);
 /* modelDescription.xml as text, and its guid. */
 extern char *xml;
