@@ -456,6 +456,95 @@ pub unsafe extern "C" fn fmi2SetString(
 }
 
 // ---- FMU states ----
+// The bodies are shared with the FMI 3.0 functions (`exports3.rs`), which differ only in names.
+
+/// `fmi2GetFMUstate`/`fmi3GetFMUState`.
+pub(crate) unsafe fn get_state(
+    c: fmi2Component,
+    func: &str,
+    slot: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, func, allowed::ANY, |inst| {
+        let slot = out(slot, "FMUstate")?;
+        let snap = inst.snapshot()?;
+        store(inst, slot, snap)
+    })
+}
+
+/// `fmi2SetFMUstate`/`fmi3SetFMUState`.
+pub(crate) fn set_state(c: fmi2Component, func: &str, state: fmi2FMUstate) -> fmi2Status {
+    call(c, func, allowed::ANY, |inst| {
+        let snap = inst.state_ref(state)?.clone();
+        inst.restore(&snap)
+    })
+}
+
+/// `fmi2FreeFMUstate`/`fmi3FreeFMUState`.
+pub(crate) unsafe fn free_state(
+    c: fmi2Component,
+    func: &str,
+    slot: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, func, allowed::ANY, |inst| {
+        let slot = out(slot, "FMUstate")?;
+        if !slot.is_null() {
+            inst.free_state(*slot)?;
+            *slot = ptr::null_mut();
+        }
+        Ok(fmi2OK)
+    })
+}
+
+/// `fmi2SerializedFMUstateSize`/`fmi3SerializedFMUStateSize`.
+pub(crate) unsafe fn state_size(
+    c: fmi2Component,
+    func: &str,
+    state: fmi2FMUstate,
+    size: *mut usize,
+) -> fmi2Status {
+    call(c, func, allowed::ANY, |inst| {
+        let size = out(size, "size")?;
+        *size = inst.state_ref(state)?.serialize().len();
+        Ok(fmi2OK)
+    })
+}
+
+/// `fmi2SerializeFMUstate`/`fmi3SerializeFMUState`.
+pub(crate) unsafe fn serialize_state(
+    c: fmi2Component,
+    func: &str,
+    state: fmi2FMUstate,
+    dst: *mut u8,
+    size: usize,
+) -> fmi2Status {
+    call(c, func, allowed::ANY, |inst| {
+        let bytes = inst.state_ref(state)?.serialize();
+        if size < bytes.len() {
+            return Err(format!(
+                "buffer of {size} bytes is too small: {} needed",
+                bytes.len()
+            ));
+        }
+        array_mut(dst, bytes.len(), "serializedState")?.copy_from_slice(&bytes);
+        Ok(fmi2OK)
+    })
+}
+
+/// `fmi2DeSerializeFMUstate`/`fmi3DeserializeFMUState`.
+pub(crate) unsafe fn deserialize_state(
+    c: fmi2Component,
+    func: &str,
+    src: *const u8,
+    size: usize,
+    slot: *mut fmi2FMUstate,
+) -> fmi2Status {
+    call(c, func, allowed::ANY, |inst| {
+        let slot = out(slot, "FMUstate")?;
+        let snap = Snapshot::deserialize(array(src, size, "serializedState")?)?;
+        inst.accept(&snap)?;
+        store(inst, slot, snap)
+    })
+}
 
 /// Copies the instance state into `*FMUstate` (a new state if it is NULL, else overwritten).
 #[no_mangle]
@@ -463,15 +552,11 @@ pub unsafe extern "C" fn fmi2GetFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    call(c, "fmi2GetFMUstate", allowed::ANY, |inst| {
-        let slot = out(FMUstate, "FMUstate")?;
-        let snap = inst.snapshot()?;
-        store(inst, slot, snap)
-    })
+    get_state(c, "fmi2GetFMUstate", FMUstate)
 }
 
 /// Puts `snap` into the state `*slot` (reused when non-NULL, else a new one).
-pub(crate) fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot) -> Outcome {
+fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot) -> Outcome {
     if slot.is_null() {
         *slot = inst.register(snap);
     } else {
@@ -483,10 +568,7 @@ pub(crate) fn store(inst: &mut Instance, slot: &mut fmi2FMUstate, snap: Snapshot
 /// Restores a state made by this instance.
 #[no_mangle]
 pub unsafe extern "C" fn fmi2SetFMUstate(c: fmi2Component, FMUstate: fmi2FMUstate) -> fmi2Status {
-    call(c, "fmi2SetFMUstate", allowed::ANY, |inst| {
-        let snap = inst.state_ref(FMUstate)?.clone();
-        inst.restore(&snap)
-    })
+    set_state(c, "fmi2SetFMUstate", FMUstate)
 }
 
 /// Frees `*FMUstate` and sets it to NULL.
@@ -495,14 +577,7 @@ pub unsafe extern "C" fn fmi2FreeFMUstate(
     c: fmi2Component,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    call(c, "fmi2FreeFMUstate", allowed::ANY, |inst| {
-        let slot = out(FMUstate, "FMUstate")?;
-        if !slot.is_null() {
-            inst.free_state(*slot)?;
-            *slot = ptr::null_mut();
-        }
-        Ok(fmi2OK)
-    })
+    free_state(c, "fmi2FreeFMUstate", FMUstate)
 }
 
 /// Size (bytes) of the serialized form of a state.
@@ -512,11 +587,7 @@ pub unsafe extern "C" fn fmi2SerializedFMUstateSize(
     FMUstate: fmi2FMUstate,
     size: *mut usize,
 ) -> fmi2Status {
-    call(c, "fmi2SerializedFMUstateSize", allowed::ANY, |inst| {
-        let size = out(size, "size")?;
-        *size = inst.state_ref(FMUstate)?.serialize().len();
-        Ok(fmi2OK)
-    })
+    state_size(c, "fmi2SerializedFMUstateSize", FMUstate, size)
 }
 
 /// Writes the serialized state into `serializedState[0..size]`.
@@ -527,18 +598,13 @@ pub unsafe extern "C" fn fmi2SerializeFMUstate(
     serializedState: *mut fmi2Byte,
     size: usize,
 ) -> fmi2Status {
-    call(c, "fmi2SerializeFMUstate", allowed::ANY, |inst| {
-        let bytes = inst.state_ref(FMUstate)?.serialize();
-        if size < bytes.len() {
-            return Err(format!(
-                "buffer of {size} bytes is too small: {} needed",
-                bytes.len()
-            ));
-        }
-        let dst = array_mut(serializedState.cast::<u8>(), bytes.len(), "serializedState")?;
-        dst.copy_from_slice(&bytes);
-        Ok(fmi2OK)
-    })
+    serialize_state(
+        c,
+        "fmi2SerializeFMUstate",
+        FMUstate,
+        serializedState.cast::<u8>(),
+        size,
+    )
 }
 
 /// A state from bytes made by `fmi2SerializeFMUstate` (in any process); corrupt, truncated or
@@ -550,13 +616,13 @@ pub unsafe extern "C" fn fmi2DeSerializeFMUstate(
     size: usize,
     FMUstate: *mut fmi2FMUstate,
 ) -> fmi2Status {
-    call(c, "fmi2DeSerializeFMUstate", allowed::ANY, |inst| {
-        let slot = out(FMUstate, "FMUstate")?;
-        let bytes = array(serializedState.cast::<u8>(), size, "serializedState")?;
-        let snap = Snapshot::deserialize(bytes)?;
-        inst.accept(&snap)?;
-        store(inst, slot, snap)
-    })
+    deserialize_state(
+        c,
+        "fmi2DeSerializeFMUstate",
+        serializedState.cast::<u8>(),
+        size,
+        FMUstate,
+    )
 }
 
 /// Not provided (`providesDirectionalDerivative="false"`): always refused.

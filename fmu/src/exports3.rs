@@ -24,12 +24,11 @@ use std::ffi::{c_char, CString};
 use std::panic::catch_unwind;
 use std::ptr;
 
-use crate::exports::{array, array_mut, call, out, store, text, write_array};
+use crate::exports::{self as states, array, array_mut, call, out, text, write_array};
 use crate::fmi2::fmi2EventInfo;
 use crate::fmi3::*;
 use crate::instance::{allowed, Access, Api, Instance, Interface, Logger, Outcome};
 use crate::md::{EVENT_INDICATORS, GUID, STATES};
-use crate::state::Snapshot;
 
 /// Refuses an array of `n_values` values for `nvr` value references (the model has scalars only).
 fn scalars(nvr: usize, n_values: usize) -> Result<(), String> {
@@ -888,7 +887,7 @@ pub unsafe extern "C" fn fmi3GetVariableDependencies(
     )
 }
 
-// ---- FMU states ----
+// ---- FMU states (the FMI 2.0 functions' bodies) ----
 
 /// Copies the instance state into `*FMUState` (a new state if it is NULL, else overwritten).
 #[no_mangle]
@@ -896,11 +895,7 @@ pub unsafe extern "C" fn fmi3GetFMUState(
     instance: fmi3Instance,
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
-    call(instance, "fmi3GetFMUState", allowed::ANY, |inst| {
-        let slot = out(FMUState, "FMUState")?;
-        let snap = inst.snapshot()?;
-        store(inst, slot, snap)
-    })
+    states::get_state(instance, "fmi3GetFMUState", FMUState)
 }
 
 /// Restores a state made by this instance.
@@ -909,10 +904,7 @@ pub unsafe extern "C" fn fmi3SetFMUState(
     instance: fmi3Instance,
     FMUState: fmi3FMUState,
 ) -> fmi3Status {
-    call(instance, "fmi3SetFMUState", allowed::ANY, |inst| {
-        let snap = inst.state_ref(FMUState)?.clone();
-        inst.restore(&snap)
-    })
+    states::set_state(instance, "fmi3SetFMUState", FMUState)
 }
 
 /// Frees `*FMUState` and sets it to NULL.
@@ -921,14 +913,7 @@ pub unsafe extern "C" fn fmi3FreeFMUState(
     instance: fmi3Instance,
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
-    call(instance, "fmi3FreeFMUState", allowed::ANY, |inst| {
-        let slot = out(FMUState, "FMUState")?;
-        if !slot.is_null() {
-            inst.free_state(*slot)?;
-            *slot = ptr::null_mut();
-        }
-        Ok(fmi3OK)
-    })
+    states::free_state(instance, "fmi3FreeFMUState", FMUState)
 }
 
 /// Size (bytes) of the serialized form of a state.
@@ -938,16 +923,7 @@ pub unsafe extern "C" fn fmi3SerializedFMUStateSize(
     FMUState: fmi3FMUState,
     size: *mut usize,
 ) -> fmi3Status {
-    call(
-        instance,
-        "fmi3SerializedFMUStateSize",
-        allowed::ANY,
-        |inst| {
-            let size = out(size, "size")?;
-            *size = inst.state_ref(FMUState)?.serialize().len();
-            Ok(fmi3OK)
-        },
-    )
+    states::state_size(instance, "fmi3SerializedFMUStateSize", FMUState, size)
 }
 
 /// Writes the serialized state into `serializedState[0..size]`.
@@ -958,17 +934,8 @@ pub unsafe extern "C" fn fmi3SerializeFMUState(
     serializedState: *mut fmi3Byte,
     size: usize,
 ) -> fmi3Status {
-    call(instance, "fmi3SerializeFMUState", allowed::ANY, |inst| {
-        let bytes = inst.state_ref(FMUState)?.serialize();
-        if size < bytes.len() {
-            return Err(format!(
-                "buffer of {size} bytes is too small: {} needed",
-                bytes.len()
-            ));
-        }
-        array_mut(serializedState, bytes.len(), "serializedState")?.copy_from_slice(&bytes);
-        Ok(fmi3OK)
-    })
+    let func = "fmi3SerializeFMUState";
+    states::serialize_state(instance, func, FMUState, serializedState, size)
 }
 
 /// A state from bytes made by `fmi3SerializeFMUState` (in any process) for an instance of the
@@ -980,12 +947,8 @@ pub unsafe extern "C" fn fmi3DeserializeFMUState(
     size: usize,
     FMUState: *mut fmi3FMUState,
 ) -> fmi3Status {
-    call(instance, "fmi3DeserializeFMUState", allowed::ANY, |inst| {
-        let slot = out(FMUState, "FMUState")?;
-        let snap = Snapshot::deserialize(array(serializedState, size, "serializedState")?)?;
-        inst.accept(&snap)?;
-        store(inst, slot, snap)
-    })
+    let func = "fmi3DeserializeFMUState";
+    states::deserialize_state(instance, func, serializedState, size, FMUState)
 }
 
 /// Not provided (`providesDirectionalDerivatives="false"`).
