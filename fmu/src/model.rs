@@ -638,8 +638,10 @@ impl Model {
         });
         match result {
             Ok(()) => {
+                // The event's time in seconds, kept inside the step against the rounding of
+                // `τ/ω0`.
                 self.time = if early {
-                    self.scale.time(self.sim.time()).min(t_end)
+                    self.scale.time(self.sim.time()).clamp(undo_time, t_end)
                 } else {
                     t_end
                 };
