@@ -657,7 +657,7 @@ impl Model {
                 } else {
                     describe(&e, &self.scale)
                 };
-                self.time = self.scale.time(self.sim.time());
+                self.time = self.scale.time(self.sim.time()).clamp(undo_time, t_end);
                 self.at_event = false;
                 // Where the core stopped is kept only if it is a usable state (a solution that
                 // overflowed may leave huge velocities whose energies are infinite, or a mass

@@ -538,6 +538,9 @@ impl Simulator {
                 v.phi = phi;
             }
         }
+        // Still at the instant of a barrier crossing (the run stopped at the snap-through): the
+        // new step starts on the barrier too, so that root is not found again.
+        self.on_barrier &= self.t0 == self.now;
         self.t0 = self.now;
         if st.mode == ContactMode::Free {
             self.u0 = (st.x - z).max(0.0);
@@ -551,7 +554,6 @@ impl Simulator {
         } else {
             self.pinned = 0;
         }
-        self.on_barrier = false;
         self.live = false;
     }
 
