@@ -1029,11 +1029,15 @@ static void c_states(int k) {
         int bad = 0;
         if (src < 7 && in->nst) st = &in->st[pick(in->nst)], h = st->h;
         else if (src < 9 && other->c && other->nst) h = other->st[pick(other->nst)].h, bad = 1;
-        else if (in->stale) h = in->stale, bad = 1;
+        else if (in->stale) h = in->stale, bad = 2;
         else return;
-        /* A freed handle's address may have been reused for a live state of this instance. */
-        for (int j = 0; bad && j < in->nst; j++)
-            if (in->st[j].h == h) st = &in->st[j], bad = 0;
+        /* A freed handle's address may have been reused for a live state (which depends on the
+           allocator): then a handle the FMU never made stands in for it, so that a seed's calls
+           do not depend on the allocator. */
+        static int never_made;
+        for (int j = 0; bad == 2 && j < MAXST; j++)
+            if ((j < in->nst && in->st[j].h == h) || (other->c && j < other->nst && other->st[j].h == h))
+                h = &never_made;
 
         note("fmi3SetFMUState(I%d, %s) in %s", k, bad ? "foreign/stale" : "own", life_name[in->m.life]);
         before_call();
