@@ -9,6 +9,9 @@
 #   make stress-fmu     fault campaign (part of make stress): C host fuzz mode over FUZZ_SEEDS x
 #                       FUZZ_CALLS, valgrind memcheck (host test + VALGRIND_SEEDS x VALGRIND_CALLS),
 #                       cargo-fuzz targets for FUZZ_SECONDS each
+#                       FMI 3.0 host (host3): fuzz FUZZ3_SEEDS x FUZZ3_CALLS, valgrind memcheck
+#                       (host3 test + VALGRIND3_SEEDS x VALGRIND3_CALLS)
+#   make fmu-host3      the FMI 3.0 C host target/fmu/host3 (tests/fmu_host/fmi3, official headers)
 
 FMU_NAME := bistable_impact
 FMU_DIR := target/fmu
@@ -26,8 +29,22 @@ FUZZ_CALLS ?= 20000
 VALGRIND_SEEDS ?= 1-10
 VALGRIND_CALLS ?= 20000
 FUZZ_SECONDS ?= 300
+# FMI 3.0 C host (tests/fmu_host/fmi3): compiled against the official FMI 3.0 headers shipped with
+# fmpy (fmi3Functions.h, fmi3FunctionTypes.h, fmi3PlatformTypes.h; fmi2FunctionTypes.h for the
+# comparison with the FMI 2.0 functions of the same binary), run on the FMI 3.0 FMU's binary and
+# generated modelDescription.xml. Quick fuzz in test-fmu (seconds), >= 1e6 calls in stress-fmu.
+FMU_HOST3 := $(FMU_DIR)/host3
+FMU3_SO := $(FMU3_STAGE)/binaries/x86_64-linux/$(FMU_NAME).so
+FMU3_MD := $(FMU3_STAGE)/modelDescription.xml
+FMI_C_HEADERS = $(shell $(VENV_PY) -c "import fmpy,os;print(os.path.join(os.path.dirname(fmpy.__file__),'c-code'))")
+FMU_HOST3_SRC := tests/fmu_host/fmi3/host3.c tests/fmu_host/fmi3/fuzz3.c
+FMU_FUZZ3_QUICK := 1-20 5000
+FUZZ3_SEEDS ?= 1-200
+FUZZ3_CALLS ?= 5000
+VALGRIND3_SEEDS ?= 1-5
+VALGRIND3_CALLS ?= 5000
 
-.PHONY: fmu test-fmu fmu-host fmu-reference fmu-guid fmu-bench fmu-demo stress-fmu
+.PHONY: fmu test-fmu fmu-host fmu-reference fmu-guid fmu-bench fmu-demo stress-fmu fmu-host3
 
 TEST_TARGETS += test-fmu
 DEMO_TARGETS += fmu fmu-demo
@@ -58,10 +75,21 @@ $(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h fmu/include/$(FMU_NAME).h
 
 fmu-host: $(FMU_HOST)
 
+$(FMU_HOST3): $(FMU_HOST3_SRC) tests/fmu_host/fmi3/host3.h
+	mkdir -p $(FMU_DIR)
+	@test -f "$(FMI_C_HEADERS)/fmi3Functions.h" || { echo "fmi3Functions.h not found (fmpy c-code: '$(FMI_C_HEADERS)')"; exit 1; }
+	$(CC) -std=gnu11 -O2 -g -Wall -Wextra -Werror -I"$(FMI_C_HEADERS)" $(FMU_HOST3_SRC) -o $@ -ldl -lm
+
+fmu-host3: setup $(FMU_HOST3)
+
+test-fmu stress-fmu: fmu-host3
+
 test-fmu: setup fmu fmu-host
 	$(CARGO) build --release -p bistable-cli
 	$(FMU_HOST) test $(FMU_SO) modelDescription.xml
 	FUZZ_QUIET=1 $(FMU_HOST) fuzz $(FMU_SO) modelDescription.xml $(FMU_FUZZ_QUICK)
+	$(FMU_HOST3) test $(FMU3_SO) $(FMU3_MD)
+	FUZZ_QUIET=1 $(FMU_HOST3) fuzz $(FMU3_SO) $(FMU3_MD) $(FMU_FUZZ3_QUICK)
 	.venv/bin/fmpy validate $(FMU)
 	.venv/bin/fmpy validate $(FMU3)
 	$(VENV_PY) -m pytest -q tests/fmu
@@ -87,5 +115,7 @@ fmu-demo: setup fmu
 stress-fmu: setup fmu fmu-host
 	FUZZ_QUIET=1 $(FMU_HOST) fuzz $(FMU_SO) modelDescription.xml $(FUZZ_SEEDS) $(FUZZ_CALLS)
 	bash fmu/valgrind.sh $(FMU_HOST) target/release/lib$(FMU_NAME).so $(VALGRIND_SEEDS) $(VALGRIND_CALLS)
+	FUZZ_QUIET=1 $(FMU_HOST3) fuzz $(FMU3_SO) $(FMU3_MD) $(FUZZ3_SEEDS) $(FUZZ3_CALLS)
+	bash fmu/valgrind.sh $(FMU_HOST3) target/release/lib$(FMU_NAME).so $(VALGRIND3_SEEDS) $(VALGRIND3_CALLS) $(FMU3_MD)
 	bash fmu/fuzz/run.sh $(FUZZ_SECONDS)
 	@echo "stress-fmu: passed"

@@ -7,10 +7,12 @@
 # must equal those of a native run: a seed's sequence does not depend on the allocator.
 #
 #   bash fmu/valgrind.sh HOST LIB.so SEEDS NCALLS        (part of make stress-fmu)
+#   bash fmu/valgrind.sh HOST3 LIB.so SEEDS NCALLS MD3   the FMI 3.0 host (target/fmu/host3) with the
+#                                                        FMI 3.0 modelDescription.xml
 set -euo pipefail
 cd "$(dirname "$0")/.."
 host=$1 lib=$2 seeds=$3 calls=$4
-md=modelDescription.xml
+md=${5:-modelDescription.xml}
 
 if ! command -v valgrind >/dev/null; then
   echo "valgrind: installing the Debian package"
