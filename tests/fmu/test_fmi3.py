@@ -181,19 +181,24 @@ class EarlyReturn:
             pass
         self.fmu.enterStepMode()
 
+    def step(self, t_end):
+        """One fmi3DoStep towards `t_end` (it returns early at an event); (time, x, v,
+        impact_count) after it."""
+        handling, terminate, early, last = self.fmu.doStep(self.t, t_end - self.t)
+        assert not terminate
+        assert early == (last < t_end)
+        self.t = last
+        if handling:
+            self.fmu.enterEventMode()
+            self.settle()
+        x, v = self.fmu.getFloat64([self.vr["x"], self.vr["v"]])
+        return last, x, v, self.fmu.getInt32([self.vr["impact_count"]])[0]
+
     def advance(self, t_end):
         """Steps to `t_end` through every early return; the (time, x, v, impact_count) after each."""
         out = []
         while self.t < t_end:
-            handling, terminate, early, last = self.fmu.doStep(self.t, t_end - self.t)
-            assert not terminate
-            assert early == (last < t_end)
-            self.t = last
-            if handling:
-                self.fmu.enterEventMode()
-                self.settle()
-            x, v = self.fmu.getFloat64([self.vr["x"], self.vr["v"]])
-            out.append((last, x, v, self.fmu.getInt32([self.vr["impact_count"]])[0]))
+            out.append(self.step(t_end))
         return out
 
     def close(self):
@@ -219,6 +224,17 @@ def test_fmu_state_between_early_returns_replays_the_run(fmu3, tmp_path):
     b.fmu.setFMUState(b.fmu.deserializeFMUState(data))
     b.t = 37.3
     assert b.advance(80.0) == first
+    # A state taken at an event (right after an early return) restores too.
+    a.fmu.setFMUState(state)
+    a.t = 37.3
+    at_event = a.step(80.0)[0]
+    assert 37.3 < at_event < 80.0
+    a.fmu.freeFMUState(state)
+    state = a.fmu.getFMUState()
+    rest = a.advance(80.0)
+    a.fmu.setFMUState(state)
+    a.t = at_event
+    assert a.advance(80.0) == rest
     a.fmu.freeFMUState(state)
     a.close()
     b.close()

@@ -102,18 +102,28 @@ impl SampleHistory {
         self.samples.iter().flatten().copied()
     }
 
+    /// Number of stored samples.
+    fn len(&self) -> usize {
+        self.samples.iter().flatten().count()
+    }
+
     /// The newest sample.
     pub fn newest(&self) -> Option<Sample> {
         self.entries().last().map(|e| e.0)
     }
 
-    /// Adds a sample after the newest one (the oldest beyond [`MAX_SAMPLES`] is dropped).
+    /// Adds a sample after the newest one (the oldest beyond [`MAX_SAMPLES`] is dropped). A
+    /// sample at the instant of the newest one replaces it: the host's latest values for that
+    /// instant (a step that made no progress, e.g. an FMI 3.0 early return at its start).
     pub fn push(&mut self, s: Sample) -> Result<(), ParamError> {
         if !s.z.is_finite() {
             return Err(refuse("plate_sample_z", s.z, "must be finite"));
         }
         if !s.zdot.is_finite() {
             return Err(refuse("plate_sample_zdot", s.zdot, "must be finite"));
+        }
+        if let Some(n) = self.newest().filter(|p| p.t == s.t).map(|_| self.len()) {
+            self.samples[n - 1] = None;
         }
         let joined = match self.newest() {
             Some(prev) => {
@@ -129,7 +139,7 @@ impl SampleHistory {
             }
             None => false,
         };
-        let n = self.entries().count();
+        let n = self.len();
         if n == MAX_SAMPLES {
             self.samples.rotate_left(1);
             self.samples[MAX_SAMPLES - 1] = None;
@@ -288,6 +298,26 @@ mod tests {
     }
 
     #[test]
+    fn a_sample_at_the_newest_instant_replaces_it_and_an_earlier_one_is_refused() {
+        let mut hist = SampleHistory::new();
+        for k in 0..3 {
+            hist.push(sine(0.1 * f64::from(k))).unwrap();
+        }
+        let same = Sample {
+            z: 0.5,
+            ..sine(0.2)
+        };
+        hist.push(same).unwrap();
+        let kept: Vec<(Sample, bool)> = hist.entries().collect();
+        assert_eq!(kept.len(), 3);
+        assert_eq!(kept[2].0, same);
+        // Replaced as if pushed after the second sample: a jump of the position starts anew.
+        assert!(kept[1].1 && !kept[2].1);
+        assert!(hist.push(sine(0.15)).is_err());
+        assert_eq!(hist.entries().count(), 3);
+    }
+
+    #[test]
     fn hermite_reproduces_a_quintic() {
         let p = |t: f64| {
             0.3 - 0.2 * t + 0.5 * t * t + 0.1 * t.powi(3) - 0.05 * t.powi(4) + 0.02 * t.powi(5)
@@ -384,7 +414,7 @@ mod tests {
         assert_eq!(h2.usable(Instant::new(0.101)).len(), 1);
         assert_eq!(h2.usable(Instant::new(1.1)).len(), 1);
         assert_eq!(h2.usable(Instant::new(0.2)).len(), 2);
-        assert!(h2.push(sine(0.1)).is_err());
+        assert!(h2.push(sine(0.05)).is_err());
         let mut nan = sine(0.3);
         nan.zdot = f64::NAN;
         assert!(h2.push(nan).is_err());
