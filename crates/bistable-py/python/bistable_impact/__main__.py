@@ -8,6 +8,7 @@ the result is the map CSV (``--out``) or printed to stdout.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import List, Optional
 
@@ -18,14 +19,17 @@ def _range(text: str) -> List[float]:
         start, end, count = float(a), float(b), int(n)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not A:B:N")
+    if not (math.isfinite(start) and math.isfinite(end)):
+        raise argparse.ArgumentTypeError(f"{text!r}: A and B must be finite")
     if count < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: N must be >= 1")
-    if count == 1:
-        return [start]
-    return [
-        start if i == 0 else end if i == count - 1 else start + (end - start) * (i / (count - 1))
-        for i in range(count)
-    ]
+    if count == 1 and start != end:
+        raise argparse.ArgumentTypeError(f"{text!r}: N = 1 needs A = B (a single value)")
+    if count > 1 and start == end:
+        raise argparse.ArgumentTypeError(f"{text!r}: A = B needs N = 1")
+    from . import linspace
+
+    return list(linspace(start, end, count))
 
 
 def main(argv: Optional[List[str]] = None) -> int:
