@@ -9,7 +9,7 @@ use bistable_analysis::thresholds::{self, check_restitution};
 use bistable_core::{ClassifyOptions, Sinusoid};
 
 use crate::common::{
-    check_signals, model, param_err, positive, record_dict, sim_err, threads as threads_arg,
+    check_signals, model, param_err, positive, record_dict, sim_err, threads as threads_arg, Stop,
 };
 
 #[allow(clippy::too_many_arguments)]
@@ -68,11 +68,13 @@ pub(crate) fn classify<'py>(
 }
 
 /// Classifies every `(omega, velocity)` of `points` on `threads` threads (0: all cores); the
-/// records in the order of `points`; a point that fails raises.
+/// records in the order of `points`; a point that fails raises. After each point, Python's
+/// signal handlers run (Ctrl-C raises `KeyboardInterrupt` and stops the sweep) and `progress`,
+/// if given, is called with `(points done, points)`; an exception from it stops the sweep.
 #[pyfunction]
 #[pyo3(signature = (points, zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation",
     max_periods=20000.0, full=false, max_period=16, period_tol=1e-8, lyapunov_periods=300,
-    threads=0))]
+    threads=0, progress=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn classify_many<'py>(
     py: Python<'py>,
@@ -87,6 +89,7 @@ pub(crate) fn classify_many<'py>(
     period_tol: f64,
     lyapunov_periods: u32,
     threads: usize,
+    progress: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let first = points.first().copied().unwrap_or((1.0, 0.0));
     let m = model(py, first.0, first.1, zeta, restitution, tol, chatter)?;
@@ -103,10 +106,18 @@ pub(crate) fn classify_many<'py>(
     )?;
     let threads = threads_arg(py, threads)?;
     let mut records: Vec<Option<Record>> = vec![None; points.len()];
+    let (mut done, total) = (0usize, points.len());
     py.allow_threads(|| {
         classify_points(&m, &points, co, threads, |i, r| {
             records[i] = Some(Record::new(&r?));
-            check_signals()
+            done += 1;
+            check_signals()?;
+            match &progress {
+                Some(f) => {
+                    Python::with_gil(|py| f.call1(py, (done, total)).map(|_| ())).map_err(Stop::Py)
+                }
+                None => Ok(()),
+            }
         })
     })
     .map_err(|e| e.into_py(py))?;

@@ -42,6 +42,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     m.add_argument("--out", metavar="FILE.csv", help="map CSV (kept results are reused)")
     m.add_argument("--threads", type=int, default=0, help="local Rust threads (0: all cores)")
     m.add_argument("--chunk", type=int, default=16, help="points per Dask task")
+    m.add_argument("--progress", action="store_true", help="a progress line on stderr")
     m.add_argument("--zeta", type=float, default=0.02)
     m.add_argument("--restitution", type=float, default=0.85)
     m.add_argument("--tol", type=float, default=1e-16)
@@ -65,6 +66,7 @@ def main(argv: Optional[List[str]] = None) -> int:
             store=a.out,
             chunk=a.chunk,
             threads=a.threads,
+            progress=a.progress,
             zeta=a.zeta,
             restitution=a.restitution,
             tol=a.tol,
