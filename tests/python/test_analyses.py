@@ -309,3 +309,62 @@ def test_linspace_is_the_cli_range(cli):
     w = bi.linspace(0.2, 3.5, 7)
     assert w[0] == 0.2 and w[-1] == 3.5 and len(w) == 7
     assert list(bi.linspace(3.0, 1.0, 3)) == [3.0, 2.0, 1.0]
+
+
+# -- arguments and the GIL -----------------------------------------------------------------
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: bi.orbit("1.75", 0.07),
+        lambda: bi.orbit(1.75, 0.07, period=1.5),
+        lambda: bi.continue_omega([1.0, 2.0], 0.07, method=1),
+        lambda: bi.bifurcation("omega", [2.0], velocity="fast"),
+        lambda: bi.bifurcation("omega", [2.0], velocity=0.07, branch_periods=["a"]),
+        lambda: bi.energy_map(nx=2.5),
+        lambda: bi.energy_map(u_range="wide"),
+        lambda: bi.spectrum(2.2, 0.07, record=None),
+    ],
+)
+def test_wrong_types_raise(call):
+    # TypeError for a wrong type; ValueError where a string reaches numpy's float conversion.
+    with pytest.raises((TypeError, ValueError)):
+        call()
+
+
+def test_absurd_sizes_are_refused_not_allocated():
+    with pytest.raises(ValueError, match="for 'nx'"):
+        bi.energy_map(nx=100_000, ny=100_000)
+    with pytest.raises(ValueError, match="for 'record'"):
+        bi.bifurcation("omega", [2.0, 2.1], velocity=0.07, record=4_000_000_000)
+    with pytest.raises(ValueError, match="for 'record'"):
+        bi.spectrum(2.2, 0.07, record=1 << 24, samples=64)
+    with pytest.raises((OverflowError, ValueError)):
+        bi.orbit(1.75, 0.07, settle=-1)
+
+
+@pytest.mark.parametrize(
+    "call",
+    [
+        lambda: bi.bifurcation("omega", bi.linspace(2.0, 2.5, 6), velocity=0.07, threads=1),
+        lambda: bi.continue_omega(bi.linspace(1.6, 2.4, 9), 0.07, settle=300, threads=1),
+        lambda: bi.spectrum(2.45, 0.07, record=2048),
+        lambda: bi.orbit(2.2, 0.07, period=2, settle=20000),
+        lambda: bi.energy_map(omega=2.45, velocity=0.07, periods=2000, nx=8, ny=8),
+    ],
+)
+def test_the_gil_is_released(call):
+    # While the call runs in another thread, this thread keeps executing Python: with the GIL
+    # held for the whole native call it could not run at all until the call returned.
+    import threading
+
+    done = threading.Event()
+    worker = threading.Thread(target=lambda: (call(), done.set()))
+    spins = 0
+    worker.start()
+    while not done.is_set() and worker.is_alive():
+        spins += 1
+    worker.join()
+    assert done.is_set()
+    assert spins > 1000, spins

@@ -13,6 +13,9 @@ use crate::common::{check_signals, invalid, invalid_text, model, table, threads 
 use crate::common::{Col, Stop};
 use crate::orbit::{check_period, orbit_rows};
 
+/// Most recorded cycles over all points of one call.
+const MAX_RECORDED: u64 = 100_000_000;
+
 /// Bifurcation data along `values` of `param` (see `bistable_impact.bifurcation`).
 #[pyfunction]
 #[pyo3(signature = (param, values, omega=None, velocity=None, transient=500, record=100,
@@ -86,6 +89,15 @@ pub(crate) fn bifurcation<'py>(
         .collect::<PyResult<Vec<Model>>>()?;
     if record < 1 {
         return Err(invalid_text("record", record, "must be >= 1"));
+    }
+    // The recorded cycles are kept in memory (per point: a maximum and a section per cycle,
+    // and every impact).
+    if u64::from(record) * values.len() as u64 > MAX_RECORDED {
+        return Err(invalid_text(
+            "record",
+            record,
+            &format!("record × len(values) must be at most {MAX_RECORDED}"),
+        ));
     }
     let samples = NonZeroU32::new(samples)
         .filter(|s| s.get() >= 8)

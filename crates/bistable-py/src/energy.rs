@@ -10,8 +10,8 @@ use bistable_analysis::energy::{self, EnergyMap, ImpactPoint};
 
 use crate::common::{invalid, invalid_text, model, param_err, positive, sim_err, table, Col};
 
-/// Most cells of one map.
-const MAX_CELLS: usize = 100_000_000;
+/// Most cells of one map (about 240 MB while it is built).
+const MAX_CELLS: usize = 10_000_000;
 
 /// The energy map (see `bistable_impact.energy_map`).
 #[pyfunction]
@@ -45,7 +45,7 @@ pub(crate) fn energy_map<'py>(
         return Err(invalid_text(
             "nx",
             format!("{nx} (ny = {ny})"),
-            "nx and ny must be >= 1 with nx·ny <= 1e8",
+            "nx and ny must be >= 1 with nx·ny <= 1e7",
         ));
     }
     let impacts: Vec<ImpactPoint> = match (omega, velocity) {

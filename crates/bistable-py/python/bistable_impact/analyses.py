@@ -182,7 +182,8 @@ def bifurcation(
         param: ``'omega'`` or ``'velocity'``.
         values: the values of the control parameter (``Ω > 0`` or ``V >= 0``).
         omega, velocity: the fixed parameter.
-        transient, record: shaker periods skipped and recorded (``record >= 1``).
+        transient, record: shaker periods skipped and recorded (``record >= 1``,
+            ``record·len(values) <= 1e8``).
         samples: dense-output samples per shaker period for the maxima (>= 8).
         branch_periods: periods of the orbit branches (each ``[1, 64]``); empty: none.
         threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
@@ -236,7 +237,8 @@ def energy_map(
         restitution: ``e`` in ``[0, 1)``.
         u_range: ``(lo, hi)`` of ``u``; default: up to 1.5 and down to below the neutral line
             ``u = −(1+e)/(1−e)·cos φ`` at ``φ = 0`` (with impacts: below the lowest one).
-        nx, ny: cells along the phase and along ``u`` (the CLI draws 360 × 300).
+        nx, ny: cells along the phase and along ``u`` (the CLI draws 360 × 300;
+            ``nx·ny <= 1e7``).
         omega, velocity: the overlaid run (``Ω > 0``, ``V > 0``; both or neither).
         periods: natural periods of the overlaid run (> 0).
         zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`.
