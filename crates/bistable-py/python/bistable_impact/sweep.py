@@ -58,10 +58,10 @@ class _Store:
 
         if not records:
             return
-        pd.DataFrame.from_records(records, columns=list(COLUMNS)).to_csv(
-            self.path, mode="a", header=False, index=False
-        )
-        with open(self.path, "a") as f:
+        rows = pd.DataFrame.from_records(records, columns=list(COLUMNS))
+        with open(self.path, "a", newline="") as f:
+            rows.to_csv(f, header=False, index=False)
+            f.flush()
             os.fsync(f.fileno())
 
 
