@@ -347,24 +347,42 @@ def test_absurd_sizes_are_refused_not_allocated():
 @pytest.mark.parametrize(
     "call",
     [
-        lambda: bi.bifurcation("omega", bi.linspace(2.0, 2.5, 6), velocity=0.07, threads=1),
-        lambda: bi.continue_omega(bi.linspace(1.6, 2.4, 9), 0.07, settle=300, threads=1),
-        lambda: bi.spectrum(2.45, 0.07, record=2048),
-        lambda: bi.orbit(2.2, 0.07, period=2, settle=20000),
-        lambda: bi.energy_map(omega=2.45, velocity=0.07, periods=2000, nx=8, ny=8),
+        lambda: bi.bifurcation("omega", bi.linspace(2.0, 2.5, 6), velocity=0.07, transient=3000,
+                               threads=1),
+        lambda: bi.continue_omega(bi.linspace(1.6, 2.4, 9), 0.07, settle=3000, threads=1),
+        lambda: bi.spectrum(2.45, 0.07, record=8192),
+        lambda: bi.orbit(2.2, 0.07, period=2, settle=50000),
+        lambda: bi.energy_map(omega=2.45, velocity=0.07, periods=20000, nx=8, ny=8),
     ],
 )
 def test_the_gil_is_released(call):
-    # While the call runs in another thread, this thread keeps executing Python: with the GIL
-    # held for the whole native call it could not run at all until the call returned.
+    # This thread counts while another is inside the call (0.3 to 1 s). With the GIL held for
+    # the whole native call the count could only advance in the switch intervals (0.1 ms here)
+    # around the worker's reads of it: a GIL-holding C call (sorted() of 3e6 floats, 0.5 s)
+    # let it advance by at most 4e4 in 5 trials on this machine; released, it advances for the
+    # whole call (over 1e6 counts for most of these calls).
+    import sys
     import threading
 
-    done = threading.Event()
-    worker = threading.Thread(target=lambda: (call(), done.set()))
-    spins = 0
-    worker.start()
-    while not done.is_set() and worker.is_alive():
-        spins += 1
-    worker.join()
-    assert done.is_set()
-    assert spins > 1000, spins
+    count = [0]
+    seen = {}
+    finished = threading.Event()
+
+    def work():
+        seen["before"] = count[0]
+        call()
+        seen["after"] = count[0]
+        finished.set()
+
+    old = sys.getswitchinterval()
+    sys.setswitchinterval(1e-4)
+    try:
+        worker = threading.Thread(target=work)
+        worker.start()
+        while not finished.is_set():
+            count[0] += 1
+        worker.join()
+    finally:
+        sys.setswitchinterval(old)
+    during = seen["after"] - seen["before"]
+    assert during > 150_000, during
