@@ -97,6 +97,9 @@ def test_resumed_sweep_computes_only_the_missing_chunks(tmp_path):
         calls = []
         df = bi.sweep.map(w, v, client=client, store=store, chunk=4,
                           progress=lambda d, t: calls.append((d, t)), **OPTS)
+        # A bad point raises on the client as it would locally (from the worker's task).
+        with pytest.raises(ValueError, match="for 'omega': must be finite and > 0"):
+            bi.sweep.map([-1.0], [0.1], client=client, **OPTS)
     # Only the 16 missing points were sent, in 4 chunks.
     assert calls == [(4, 16), (8, 16), (12, 16), (16, 16)]
     assert len(df) == 24 and not df.duplicated(["omega", "velocity"]).any()
