@@ -106,15 +106,16 @@ def fig6(out: str, sizes: Sizes) -> None:
     )
     fig, (top, bottom) = plt.subplots(2, 1, figsize=(9, 8), sharex=True)
     mx = data[data["kind"] == "max_x"]
-    top.plot(mx["omega"], mx["value"], "k.", ms=2, label="simulated (max x per cycle)")
+    top.plot(mx["omega"], mx["value"], "k.", ms=2, zorder=3, label="simulated (max x per cycle)")
     for period, colour in zip((1, 2, 4, 8), ("C0", "C1", "C2", "C3")):
         o = orbits[orbits["period"] == period]
         for stable, marker in ((True, "o"), (False, "x")):
             sel = o[o["stable"] == stable]
             xs = np.repeat(sel["omega"].to_numpy(), [len(c) for c in sel["cycle_max"]])
             ys = np.concatenate(list(sel["cycle_max"])) if len(sel) else []
-            top.plot(xs, ys, marker, color=colour, ms=4, mfc="none" if not stable else colour,
-                     label=f"period {period} {'stable' if stable else 'unstable'}")
+            top.plot(xs, ys, marker, color=colour, ms=3, alpha=0.6, zorder=2,
+                     mfc="none" if not stable else colour,
+                     label=f"orbit, period {period}, {'stable' if stable else 'unstable'}")
     top.set_ylabel("max displacement x (Δx)")
     top.legend(fontsize=7, ncol=2)
     ph = data[data["kind"] == "impact_phase"]
