@@ -64,6 +64,19 @@ def classes(df: pd.DataFrame) -> Dict[tuple, str]:
     return dict(zip(zip(df["omega"], df["velocity"]), df["class"]))
 
 
+def print_simulate(n: int, calls: List[float], inside: List[float]) -> None:
+    med_call, med_in = statistics.median(calls), statistics.median(inside)
+    print(f"`simulate(1.75, 0.07, t_end=1.0)` (1 impact), {n} calls after 200 warm-up:\n")
+    print("| quantity | median | 10 % | 90 % |")
+    print("|---|---|---|---|")
+    q = lambda xs, f: sorted(xs)[int(f * (len(xs) - 1))]  # noqa: E731
+    print(f"| whole call | {1e6 * med_call:.1f} µs | {1e6 * q(calls, 0.1):.1f} µs | "
+          f"{1e6 * q(calls, 0.9):.1f} µs |")
+    print(f"| the run inside Rust (`summary['wall_time_s']`) | {1e6 * med_in:.1f} µs | "
+          f"{1e6 * q(inside, 0.1):.1f} µs | {1e6 * q(inside, 0.9):.1f} µs |")
+    print(f"| overhead (median difference) | {1e6 * (med_call - med_in):.1f} µs | | |")
+
+
 def main() -> int:
     p = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     p.add_argument("--omega-range", default="0.2:3.5:60")
@@ -71,6 +84,7 @@ def main() -> int:
     p.add_argument("--rounds", type=int, default=2)
     p.add_argument("--calls", type=int, default=2000)
     p.add_argument("--chunk", type=int, default=16)
+    p.add_argument("--no-map", action="store_true", help="only the simulate() overhead")
     a = p.parse_args()
     from distributed import Client, LocalCluster
 
@@ -81,14 +95,15 @@ def main() -> int:
     tmp = tempfile.mkdtemp()
     ref_path = os.path.join(tmp, "cli.csv")
     t = time.perf_counter()
-    cluster = LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
+    rounds = 0 if a.no_map else a.rounds
+    cluster = LocalCluster(n_workers=2 if rounds else 0, threads_per_worker=1, processes=True,
                            dashboard_address=None)  # fmt: skip
     client = Client(cluster)
     client.run(lambda: __import__("bistable_impact"))  # import in the workers before timing
     startup = time.perf_counter() - t
     mismatches = 0
     try:
-        for r in range(a.rounds):
+        for r in range(rounds):
             order = ["cli", "dask", "local"] if r % 2 == 0 else ["local", "dask", "cli"]
             for what in order:
                 if what == "cli":
@@ -131,13 +146,17 @@ def main() -> int:
     load1 = os.getloadavg()
 
     n = len(w) * len(v)
-    cli_best = min(times["cli"])
     print("## Python package (`bistable_impact`)\n")
     print(f"- machine: {platform.machine()}, {os.cpu_count()} cores; "
           f"{platform.platform()}; Python {platform.python_version()}")
     print(f"- load average (1 min) {load0[0]:.2f} before, {load1[0]:.2f} after")
     print(f"- command: `.venv/bin/python bench/python_map.py --omega-range {a.omega_range} "
-          f"--velocity-range {a.velocity_range} --rounds {a.rounds} --calls {a.calls}`\n")
+          f"--velocity-range {a.velocity_range} --rounds {a.rounds} --calls {a.calls}"
+          f"{' --no-map' if a.no_map else ''}`\n")
+    if a.no_map:
+        print_simulate(a.calls, calls, inside)
+        return 0
+    cli_best = min(times["cli"])
     print(f"Map of {len(w)} × {len(v)} = {n} points (Ω {a.omega_range}, V {a.velocity_range}, "
           f"defaults of `bistable map`), {a.rounds} round(s) in alternating order; the class of "
           f"every point compared with the CLI's map: {mismatches} differences.\n")
@@ -157,16 +176,7 @@ def main() -> int:
               f"{', '.join(f'{x:.2f}' for x in cpu[k])} | "
               f"{100 * (least / min(cpu['cli']) - 1):+.1f} % |")
     print(f"\nLocalCluster start-up (not in the times above): {startup:.2f} s.\n")
-    med_call, med_in = statistics.median(calls), statistics.median(inside)
-    print(f"`simulate(1.75, 0.07, t_end=1.0)` (1 impact), {a.calls} calls after 200 warm-up:\n")
-    print("| quantity | median | 10 % | 90 % |")
-    print("|---|---|---|---|")
-    q = lambda xs, f: sorted(xs)[int(f * (len(xs) - 1))]  # noqa: E731
-    print(f"| whole call | {1e6 * med_call:.1f} µs | {1e6 * q(calls, 0.1):.1f} µs | "
-          f"{1e6 * q(calls, 0.9):.1f} µs |")
-    print(f"| the run inside Rust (`summary['wall_time_s']`) | {1e6 * med_in:.1f} µs | "
-          f"{1e6 * q(inside, 0.1):.1f} µs | {1e6 * q(inside, 0.9):.1f} µs |")
-    print(f"| overhead (median difference) | {1e6 * (med_call - med_in):.1f} µs | | |")
+    print_simulate(a.calls, calls, inside)
     return 0
 
 
