@@ -304,11 +304,33 @@ def test_energy_map_errors(cli):
         bi.energy_map(omega=2.0, velocity=0.07, periods=-1.0)
 
 
-def test_linspace_is_the_cli_range(cli):
-    # The map's CSV over A:B:N has exactly these Ω values (one formula in bistable-analysis).
+def test_linspace_is_the_cli_range(cli, tmp_path):
+    # The CLI's map over A:B:N and `python -m bistable_impact map` over the same ranges have
+    # exactly the values of bi.linspace (one formula, bistable_analysis::grid).
+    import sys
+
     w = bi.linspace(0.2, 3.5, 7)
     assert w[0] == 0.2 and w[-1] == 3.5 and len(w) == 7
     assert list(bi.linspace(3.0, 1.0, 3)) == [3.0, 2.0, 1.0]
+    ranges = ["--omega-range", "0.2:3.5:7", "--velocity-range", "0.01:0.19:3",
+              "--max-periods", "300"]  # fmt: skip
+    cli_csv, py_csv = tmp_path / "cli.csv", tmp_path / "py.csv"
+    subprocess.run([str(cli), "map", *ranges, "--out", str(cli_csv)], check=True,
+                   capture_output=True)  # fmt: skip
+    subprocess.run([sys.executable, "-m", "bistable_impact", "map", *ranges, "--out",
+                    str(py_csv)], check=True, capture_output=True)  # fmt: skip
+    ref, got = pd.read_csv(cli_csv), pd.read_csv(py_csv)
+    assert sorted(set(ref["omega"])) == sorted(set(got["omega"])) == list(w)
+    assert sorted(set(ref["velocity"])) == sorted(set(got["velocity"])) == list(
+        bi.linspace(0.01, 0.19, 3)
+    )
+    # Malformed ranges are refused as by the CLI (exit code 2).
+    for bad in ("1:2:1", "1:1:3", "nan:2:3", "1:2:0"):
+        r = subprocess.run([sys.executable, "-m", "bistable_impact", "map", "--omega-range", bad,
+                            "--velocity-range", "0.1:0.1:1"], capture_output=True, text=True)  # fmt: skip
+        c = run_cli(cli, "map", "--omega-range", bad, "--velocity-range", "0.1:0.1:1", "--out",
+                    str(tmp_path / "x.csv"))
+        assert r.returncode == c.returncode == 2, (bad, r.stderr, c.stderr)
 
 
 # -- arguments and the GIL -----------------------------------------------------------------

@@ -7,8 +7,16 @@ the paper: time ``τ = ω0·t`` (one linear natural period is ``2π``), lengths 
 distance ``Δx`` (wells at 0 and 1, barrier at 1/2), velocities in ``ω0·Δx``, energies in
 ``k0·Δx²``; phases are shaker phases in cycles, ``[0, 1)``.
 
+What it offers mirrors the ``bistable`` CLI: :func:`simulate` and :class:`Simulator`;
+:func:`classify`, :func:`thresholds` and :func:`sweep.map <bistable_impact.sweep.map>` (local
+threads or a ``dask.distributed`` client); :func:`orbit`, :func:`continue_omega`,
+:func:`bifurcation`, :func:`energy_map` and :func:`spectrum` (module ``analyses``), which
+return the subcommands' JSON keys as dicts and their CSV files as pandas DataFrames;
+:func:`linspace` gives the values of the CLI's ``A:B:N`` ranges.
+
 Bad arguments raise ``ValueError`` (or ``TypeError`` for a wrong type) naming the argument, with
-the CLI's rule text; a failed simulation raises ``RuntimeError``. Computations release the GIL.
+the CLI's rule text; a failed simulation raises ``RuntimeError``. Computations release the GIL;
+Ctrl-C stops the sweeps, the continuation and the bifurcation data between points.
 """
 
 from __future__ import annotations
