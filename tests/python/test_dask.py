@@ -23,11 +23,11 @@ W = bi.linspace(0.5, 3.0, 8)
 V = bi.linspace(0.03, 0.15, 5)
 
 
-def cli_map(cli, tmp_path, w, v):
+def cli_map(cli, tmp_path, w, v, options=("--max-periods", "2000", "--full")):
     out = tmp_path / "cli_map.csv"
     subprocess.run(
         [str(cli), "map", f"--omega-range={float(w[0])!r}:{float(w[-1])!r}:{len(w)}",
-         f"--velocity-range={float(v[0])!r}:{float(v[-1])!r}:{len(v)}", "--max-periods", "2000", "--full",
+         f"--velocity-range={float(v[0])!r}:{float(v[-1])!r}:{len(v)}", *options,
          "--lyapunov-periods", "50", "--threads", "2", "--out", str(out)],
         check=True, capture_output=True,
     )  # fmt: skip
@@ -45,6 +45,19 @@ def assert_same_map(df, ref):
     for c in a.columns:
         x, y = a[c].astype(object).where(a[c].notna(), None), b[c].astype(object).where(b[c].notna(), None)
         assert list(x) == list(y), c
+
+
+def test_60_by_40_map_on_two_worker_processes_equals_the_cli(cli, tmp_path):
+    # The issue's acceptance grid (Fig. 9's ranges), with short runs (at most 300 natural
+    # periods, the same on both sides) to keep the suite fast.
+    w, v = bi.linspace(0.2, 3.5, 60), bi.linspace(0.005, 0.2, 40)
+    ref = cli_map(cli, tmp_path, w, v, options=("--max-periods", "300"))
+    with distributed.LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as client:
+        df = bi.sweep.map(w, v, client=client, max_periods=300.0, lyapunov_periods=50)
+    assert len(df) == 2400 and len(set(df["class"])) == 3
+    assert_same_map(df, ref)
 
 
 def test_map_with_a_worker_killed_mid_sweep_equals_the_cli(cli, tmp_path):
