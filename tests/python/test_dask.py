@@ -1,7 +1,7 @@
 """sweep.map on dask.distributed clusters: equal to the CLI's map CSV on a LocalCluster of two
-worker processes, one of which is killed mid-sweep (every point exactly once); a sweep stopped
-part way resumes from its store and computes only the missing chunks; Ctrl-C stops a local
-sweep."""
+worker processes, also with one of them killed mid-sweep (every point exactly once); a sweep
+stopped part way resumes from its store and computes only the missing chunks (or, without a
+client, points); Ctrl-C stops a local sweep."""
 
 import os
 import signal
@@ -154,3 +154,31 @@ def test_ctrl_c_stops_a_local_sweep(tmp_path):
     assert child.returncode == 0
     word, n = out.split()
     assert word == "interrupted" and int(n) <= 2, out
+
+
+def test_local_sweep_stopped_part_way_keeps_its_points(tmp_path):
+    # Without a client: an exception after 100 of 160 points (as Ctrl-C would raise) leaves the
+    # finished points in the store; the rerun computes only the others.
+    store = str(tmp_path / "map.csv")
+    w, v = bi.linspace(0.5, 3.0, 16), bi.linspace(0.03, 0.15, 10)
+    opts = {"max_periods": 300.0, "lyapunov_periods": 50}
+
+    class Stop(Exception):
+        pass
+
+    def stop_at_100(done, total):
+        if done == 100:
+            raise Stop
+
+    with pytest.raises(Stop):
+        bi.sweep.map(w, v, store=store, threads=2, progress=stop_at_100, **opts)
+    kept = pd.read_csv(store)
+    # The 100 points reported done (points still running when it stopped are dropped).
+    assert len(kept) == 100 and not kept.duplicated(["omega", "velocity"]).any()
+    totals = []
+    df = bi.sweep.map(w, v, store=store, threads=2, progress=lambda d, t: totals.append(t), **opts)
+    assert set(totals) == {160 - len(kept)} and len(totals) == 160 - len(kept)
+    assert len(df) == 160
+    merged = df.merge(kept, on=["omega", "velocity"], suffixes=("", "_kept"))
+    assert (merged["wall_time_s"] == merged["wall_time_s_kept"]).all()
+    assert_same_map(df, bi.sweep.map(w, v, threads=2, **opts))

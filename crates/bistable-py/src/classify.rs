@@ -69,12 +69,13 @@ pub(crate) fn classify<'py>(
 
 /// Classifies every `(omega, velocity)` of `points` on `threads` threads (0: all cores); the
 /// records in the order of `points`; a point that fails raises. After each point, Python's
-/// signal handlers run (Ctrl-C raises `KeyboardInterrupt` and stops the sweep) and `progress`,
-/// if given, is called with `(points done, points)`; an exception from it stops the sweep.
+/// signal handlers run (Ctrl-C raises `KeyboardInterrupt` and stops the sweep), `on_record`, if
+/// given, is called with the point's record (a dict) and `progress`, if given, with
+/// `(points done, points)`; an exception from either stops the sweep.
 #[pyfunction]
 #[pyo3(signature = (points, zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation",
     max_periods=20000.0, full=false, max_period=16, period_tol=1e-8, lyapunov_periods=300,
-    threads=0, progress=None))]
+    threads=0, progress=None, on_record=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn classify_many<'py>(
     py: Python<'py>,
@@ -90,6 +91,7 @@ pub(crate) fn classify_many<'py>(
     lyapunov_periods: u32,
     threads: usize,
     progress: Option<Py<PyAny>>,
+    on_record: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
     let first = points.first().copied().unwrap_or((1.0, 0.0));
     let m = model(py, first.0, first.1, zeta, restitution, tol, chatter)?;
@@ -109,15 +111,23 @@ pub(crate) fn classify_many<'py>(
     let (mut done, total) = (0usize, points.len());
     py.allow_threads(|| {
         classify_points(&m, &points, co, threads, |i, r| {
-            records[i] = Some(Record::new(&r?));
+            let record = Record::new(&r?);
             done += 1;
             check_signals()?;
-            match &progress {
-                Some(f) => {
-                    Python::with_gil(|py| f.call1(py, (done, total)).map(|_| ())).map_err(Stop::Py)
-                }
-                None => Ok(()),
+            if on_record.is_some() || progress.is_some() {
+                Python::with_gil(|py| -> PyResult<()> {
+                    if let Some(f) = &on_record {
+                        f.call1(py, (record_dict(py, &record)?,))?;
+                    }
+                    if let Some(f) = &progress {
+                        f.call1(py, (done, total))?;
+                    }
+                    Ok(())
+                })
+                .map_err(Stop::Py)?;
             }
+            records[i] = Some(record);
+            Ok::<(), Stop>(())
         })
     })
     .map_err(|e| e.into_py(py))?;

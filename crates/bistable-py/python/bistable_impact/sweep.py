@@ -15,6 +15,8 @@ from . import _native
 COLUMNS = tuple(_native.COLUMNS)
 
 Point = Tuple[float, float]
+#: Finished points of a local sweep written to the store at a time.
+_STORE_BATCH = 64
 Progress = Callable[[int, int], Any]
 
 
@@ -96,10 +98,11 @@ def map(
             threads in this process (0: all cores), with the GIL released; Ctrl-C
             (``KeyboardInterrupt``) stops the sweep after the points in progress.
         store: a CSV file (the map CSV's columns) that keeps results: points already in it
-            (same ``zeta`` and ``restitution``) are not computed again; with a client each
-            finished task's rows are appended to it at once (so a crashed or interrupted
-            sweep resumes with only the missing tasks), without one the rows are appended when
-            all points are done; at the end it is rewritten with the whole grid.
+            (same ``zeta`` and ``restitution``) are not computed again; finished points are
+            appended to it as the sweep goes (with a client each task's rows when it is back,
+            without one every 64 points and when the sweep stops, also by Ctrl-C or an
+            error), so a crashed or interrupted sweep resumes with only the missing points;
+            at the end it is rewritten with the whole grid.
         chunk: points per Dask task (>= 1).
         progress: ``True`` for a progress line on stderr, or a callable ``f(done, total)``
             (points) called after each point (no client) or each finished task (client).
@@ -131,11 +134,23 @@ def map(
     done: Dict[Point, Dict[str, Any]] = dict(kept.done) if kept else {}
     todo = [p for p in points if p not in done]
     if client is None:
-        records = _native.classify_many(todo, threads=threads, progress=report, **options)
-        if kept:
-            kept.append(records)
-        for rec in records:
+        pending: List[Dict[str, Any]] = []
+
+        def on_record(rec: Dict[str, Any]) -> None:
             done[(rec["omega"], rec["velocity"])] = rec
+            if kept:
+                pending.append(rec)
+                if len(pending) >= _STORE_BATCH:
+                    kept.append(pending)
+                    pending.clear()
+
+        try:
+            _native.classify_many(
+                todo, threads=threads, progress=report, on_record=on_record, **options
+            )
+        finally:
+            if kept:  # also after Ctrl-C or an error: the finished points are kept
+                kept.append(pending)
     elif todo:
         from distributed import as_completed
 
