@@ -1,15 +1,18 @@
 //! `bistable_impact._native`: the Python adapter over `bistable-core` and `bistable-analysis`.
 //!
-//! No numerics here: arguments are validated by the core's own constructors (their errors
-//! become `ValueError` naming the argument, simulation failures `RuntimeError`), runs are
-//! delegated to the core and the analyses with the GIL released, and results are handed to
-//! Python as plain objects (dicts, bytes of little-endian columns that the Python layer views as
-//! numpy arrays). The Python package `bistable_impact` (in `python/`) wraps these functions.
+//! No numerics here: arguments are validated by the core's and the analyses' own checks where
+//! they have them, and otherwise with the CLI's rules and messages (errors become `ValueError`
+//! naming the argument, simulation failures `RuntimeError`); runs are delegated to the core and
+//! the analyses with the GIL released, and results are handed to Python as plain objects
+//! (dicts, bytes of little-endian columns that the Python layer views as numpy arrays). The
+//! Python package `bistable_impact` (in `python/`) wraps these functions.
 //!
-//! One module per area of the API: [`simulate`] (`simulate`, `Simulator`), [`classify`]
-//! (`classify`, the point lists of `sweep.map`, `thresholds`), [`orbit`] (`orbit`,
-//! `continue_omega`), [`bifurcation`], [`energy`] (`energy_map`), [`spectrum`]; [`common`] holds
-//! the argument checks, the model and the Ctrl-C check shared by them.
+//! One module per area of the API, each registered in `_native` below: `simulate`
+//! (`simulate`, `Simulator`), `classify` (`classify`, the point lists of `sweep.map`,
+//! `thresholds`), `orbit` (`orbit`, `continue_omega`), `bifurcation`, `energy` (`energy_map`),
+//! `spectrum`; `common` holds the argument checks, the model, the tables and the Ctrl-C check
+//! shared by them. A new area (e.g. basins) is a new module with its `#[pyfunction]`s, one
+//! `add_function` line here and its wrapper in `python/bistable_impact/`.
 
 use pyo3::prelude::*;
 
