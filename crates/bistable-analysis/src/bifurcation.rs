@@ -9,7 +9,7 @@ use bistable_core::SimError;
 use crate::branches::{self, Branches};
 use crate::cycles::{steady_cycles_over, Cycles};
 use crate::parallel::Threads;
-use crate::period::{detect_period, MAX_PERIOD, PERIOD_TOL};
+use crate::period::{detect_period, distinct, MAX_PERIOD, PERIOD_TOL};
 use crate::progress::OnProgress;
 use crate::seeds::{seeds_from, Seed};
 use crate::Model;
@@ -36,6 +36,43 @@ pub struct Bifurcation {
     pub periods: Vec<Option<usize>>,
     /// One entry per branch period, in the order of `branch_periods`.
     pub branches: Vec<Branches>,
+}
+
+/// What is reported about one point of the grid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PointSummary {
+    /// Ω of the point.
+    pub omega: f64,
+    /// V of the point.
+    pub velocity: f64,
+    /// Period of the recorded response in shaker periods (`None`: none up to 16).
+    pub period: Option<usize>,
+    /// Distinct values of max x over the recorded cycles (to [`DISTINCT_TOL`]).
+    pub distinct_max_x: usize,
+    /// Impacts per recorded shaker period.
+    pub impacts_per_cycle: f64,
+}
+
+/// Two per-cycle maxima closer than this count as one value in [`PointSummary`].
+pub const DISTINCT_TOL: f64 = 1e-6;
+
+impl Bifurcation {
+    /// The summary of every point, for the grid `models` the data was computed on with
+    /// `record` recorded shaker periods.
+    pub fn point_summaries(&self, models: &[Model], record: u32) -> Vec<PointSummary> {
+        models
+            .iter()
+            .zip(&self.points)
+            .zip(&self.periods)
+            .map(|((m, c), &period)| PointSummary {
+                omega: m.omega(),
+                velocity: m.velocity(),
+                period,
+                distinct_max_x: distinct(&c.max_x, DISTINCT_TOL),
+                impacts_per_cycle: c.impacts.len() as f64 / f64::from(record),
+            })
+            .collect()
+    }
 }
 
 /// Records every point of `models` (in parallel), detects the periods, then seeds and

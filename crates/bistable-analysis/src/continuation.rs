@@ -36,6 +36,60 @@ pub enum Curves {
     Arclength(Vec<Vec<ArcPoint>>),
 }
 
+/// Counts of the continued orbits at one V.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurvesSummary {
+    /// Orbits (natural: at the grid points; arclength: points of the traces).
+    pub orbits: usize,
+    /// The stable ones.
+    pub stable: usize,
+    /// Smallest and largest Ω with an orbit (`None` without orbits).
+    pub omega_min: Option<f64>,
+    /// See `omega_min`.
+    pub omega_max: Option<f64>,
+    /// Arclength only: the number of traces.
+    pub traces: Option<usize>,
+    /// Arclength only: turning points in Ω along the traces.
+    pub folds: Option<usize>,
+}
+
+impl Curves {
+    /// The counts of these curves, continued over the grid `omegas` (natural continuation:
+    /// `omega_min`/`omega_max` are the first and last grid values with an orbit).
+    pub fn summary(&self, omegas: &[f64]) -> CurvesSummary {
+        match self {
+            Curves::Natural(b) => {
+                let covered: Vec<f64> = b
+                    .slots
+                    .iter()
+                    .zip(omegas)
+                    .filter(|(s, _)| !s.is_empty())
+                    .map(|(_, &w)| w)
+                    .collect();
+                CurvesSummary {
+                    orbits: b.len(),
+                    stable: b.stable(),
+                    omega_min: covered.first().copied(),
+                    omega_max: covered.last().copied(),
+                    traces: None,
+                    folds: None,
+                }
+            }
+            Curves::Arclength(traces) => {
+                let pts = || traces.iter().flatten();
+                CurvesSummary {
+                    orbits: pts().count(),
+                    stable: pts().filter(|p| p.stable).count(),
+                    omega_min: pts().map(|p| p.omega).reduce(f64::min),
+                    omega_max: pts().map(|p| p.omega).reduce(f64::max),
+                    traces: Some(traces.len()),
+                    folds: Some(traces.iter().map(|t| arclength::folds(t)).sum()),
+                }
+            }
+        }
+    }
+}
+
 /// Continues the `period`-periodic orbits over the grid `models` (one V, Ω evenly spaced,
 /// non-empty). At every grid point the paper's initial condition runs `settle` shaker periods,
 /// then `4·max(p, 16) + 8` are recorded; the recorded attractor seeds the orbit (itself, or if

@@ -4,7 +4,7 @@
 //! `u = x'₋/V` is the mass velocity just before the impact in units of the shaker velocity
 //! amplitude; `φ` is the shaker phase angle (radians) of the impact.
 
-use bistable_core::{Event, SimError};
+use bistable_core::{Event, ParamError, SimError};
 
 use crate::Model;
 
@@ -88,6 +88,35 @@ impl EnergyMap {
     pub fn max_abs(&self) -> f64 {
         self.max_abs
     }
+}
+
+/// `e` when it is in `[0, 1)` (the neutral line has `1 − e` in a denominator), else the error
+/// naming `restitution`.
+pub fn check_restitution(e: f64) -> Result<f64, ParamError> {
+    if crate::thresholds::restitution_ok(e) {
+        Ok(e)
+    } else {
+        Err(ParamError {
+            name: "restitution",
+            value: e,
+            rule: "must be in [0, 1) for the energy map",
+        })
+    }
+}
+
+/// Largest `u` shown by default.
+pub const DEFAULT_U_MAX: f64 = 1.5;
+
+/// The default range of `u` of a map for restitution `e`: up to [`DEFAULT_U_MAX`], down to below
+/// the neutral line at `φ = 0` (`1.15·neutral(e, 0)`), or with `impacts` to below the lowest of
+/// them (and at most −1); the lower end lowered by 8 % of the span.
+pub fn default_u_range(e: f64, impacts: &[ImpactPoint]) -> (f64, f64) {
+    let lo = if impacts.is_empty() {
+        1.15 * neutral(e, 0.0)
+    } else {
+        impacts.iter().map(|i| i.u).fold(-1.0, f64::min)
+    };
+    (lo - 0.08 * (DEFAULT_U_MAX - lo), DEFAULT_U_MAX)
 }
 
 /// An impact of a simulation in the coordinates of the energy map.

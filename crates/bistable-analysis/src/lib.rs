@@ -29,6 +29,7 @@ pub mod branches;
 pub mod continuation;
 pub mod cycles;
 pub mod energy;
+pub mod grid;
 pub mod model;
 pub mod orbit;
 pub mod parallel;

@@ -78,6 +78,49 @@ pub fn det_relative_error(orbit: &PeriodicOrbit) -> Option<f64> {
     (!orbit.sticks).then(|| ((det - orbit.det_identity) / orbit.det_identity).abs())
 }
 
+/// Everything reported about one orbit found by shooting (`bistable orbit`, `orbit()` of the
+/// Python package).
+#[derive(Debug, Clone)]
+pub struct Summary {
+    /// The shooting result (fixed point, multipliers sorted largest first, monodromy, counts).
+    pub orbit: PeriodicOrbit,
+    /// Largest modulus of the Floquet multipliers.
+    pub max_abs_multiplier: f64,
+    /// `ln|λ|max/(p·T)`, per unit of `τ`.
+    pub floquet_exponent: f64,
+    /// Largest `x` in each cycle, ascending (empty when the minimal period is smaller).
+    pub cycle_max: Vec<f64>,
+    /// `det M`.
+    pub det_monodromy: f64,
+    /// `|det M − det_identity| / det_identity`; `None` when the orbit sticks.
+    pub det_relative_error: Option<f64>,
+    /// The initial guess `(x, x')`.
+    pub guess: (f64, f64),
+    /// Distance from the guess to the fixed point (Euclidean in `(x, x')`).
+    pub distance_to_guess: f64,
+}
+
+/// What [`Summary`] reports about `orbit`, found at `model` by [`shoot`] from `guess`.
+pub fn summarise(
+    model: &Model,
+    orbit: PeriodicOrbit,
+    guess: (f64, f64),
+) -> Result<Summary, SimError> {
+    let cycle_max = analyse(model, orbit)?
+        .map(|o| o.cycle_max)
+        .unwrap_or_default();
+    Ok(Summary {
+        orbit,
+        max_abs_multiplier: abs_multiplier(&orbit),
+        floquet_exponent: floquet_exponent(&orbit, model.shaker_period()),
+        cycle_max,
+        det_monodromy: det_monodromy(&orbit),
+        det_relative_error: det_relative_error(&orbit),
+        guess,
+        distance_to_guess: (orbit.x0 - guess.0).hypot(orbit.v0 - guess.1),
+    })
+}
+
 /// Shoots the `period`-periodic orbit (`1..=64` shaker periods) at `model` from `guess`
 /// `(x, x')` at plate phase 0, with the core's default Newton settings.
 pub fn shoot(model: &Model, period: u32, guess: (f64, f64)) -> Result<PeriodicOrbit, ShootError> {

@@ -12,7 +12,6 @@ use serde::Serialize;
 use bistable_analysis::bifurcation::{self, Bifurcation, BifurcationOptions};
 use bistable_analysis::branches::Branches;
 use bistable_analysis::cycles::Cycles;
-use bistable_analysis::period::distinct;
 use bistable_analysis::Model;
 
 use crate::branches;
@@ -201,11 +200,11 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
         },
     };
     let mut bars = StageBars::new("");
+    let data = bifurcation::compute(&models, &options, threads, &mut |p| bars.report(p))?;
+    let summaries = data.point_summaries(&models, args.record);
     let Bifurcation {
-        points,
-        periods,
-        branches,
-    } = bifurcation::compute(&models, &options, threads, &mut |p| bars.report(p))?;
+        points, branches, ..
+    } = data;
 
     let mut files = Vec::new();
     if let Some(path) = &args.out {
@@ -223,16 +222,14 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
         range: range.to_string(),
         transient: args.transient,
         record: args.record,
-        points: models
-            .iter()
-            .zip(&points)
-            .zip(&periods)
-            .map(|((m, c), &period)| PointSummary {
-                omega: m.omega(),
-                velocity: m.velocity(),
-                period,
-                distinct_max_x: distinct(&c.max_x, 1e-6),
-                impacts_per_cycle: c.impacts.len() as f64 / f64::from(args.record),
+        points: summaries
+            .into_iter()
+            .map(|p| PointSummary {
+                omega: p.omega,
+                velocity: p.velocity,
+                period: p.period,
+                distinct_max_x: p.distinct_max_x,
+                impacts_per_cycle: p.impacts_per_cycle,
             })
             .collect(),
         branches: branches

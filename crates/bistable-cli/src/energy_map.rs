@@ -103,14 +103,7 @@ fn parse_span(text: &str) -> Result<(f64, f64), CliError> {
 
 /// Runs `bistable energy-map`.
 pub fn run(args: &EnergyMapArgs) -> Result<(), CliError> {
-    let e = args.model.restitution;
-    if !(e.is_finite() && (0.0..1.0).contains(&e)) {
-        return Err(CliError::invalid(
-            "--restitution",
-            e,
-            "must be in [0, 1) for the energy map",
-        ));
-    }
+    let e = energy::check_restitution(args.model.restitution)?;
     let span = args.u_range.as_deref().map(parse_span).transpose()?;
     let mut impacts: Vec<ImpactPoint> = Vec::new();
     let mut overlay_label = None;
@@ -136,14 +129,7 @@ pub fn run(args: &EnergyMapArgs) -> Result<(), CliError> {
         ));
     }
     // Default: the whole neutral line, or the overlaid impacts with a margin.
-    let (lo, hi) = span.unwrap_or_else(|| {
-        let lo = if impacts.is_empty() {
-            1.15 * neutral(e, 0.0)
-        } else {
-            impacts.iter().map(|i| i.u).fold(-1.0, f64::min)
-        };
-        (lo - 0.08 * (1.5 - lo), 1.5)
-    });
+    let (lo, hi) = span.unwrap_or_else(|| energy::default_u_range(e, &impacts));
     plot::png(&args.plot, (1400, 1000), |root| {
         draw(root, e, (lo, hi), &impacts, overlay_label.as_deref())
     })?;

@@ -7,12 +7,9 @@ use clap::Args;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::arclength::folds;
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::cycles::settled;
-use bistable_analysis::orbit::{
-    abs_multiplier, analyse, det_monodromy, det_relative_error, floquet_exponent, shoot,
-};
+use bistable_analysis::orbit::{shoot, summarise};
 use bistable_analysis::Model;
 
 use crate::branches;
@@ -243,9 +240,7 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
             args.period, guess.0, guess.1
         ))
     })?;
-    let cycle_max = analyse(&model, orbit)?
-        .map(|o| o.cycle_max)
-        .unwrap_or_default();
+    let s = summarise(&model, orbit, guess)?;
     let report = OrbitReport {
         omega,
         velocity,
@@ -261,23 +256,23 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
                 abs: re.hypot(im),
             })
             .collect(),
-        max_abs_multiplier: abs_multiplier(&orbit),
+        max_abs_multiplier: s.max_abs_multiplier,
         stable: orbit.stable,
-        floquet_exponent: floquet_exponent(&orbit, model.shaker_period()),
+        floquet_exponent: s.floquet_exponent,
         impacts: orbit.impacts,
         sticks: orbit.sticks,
         snap_throughs: orbit.snap_throughs,
         max_x: orbit.max_x,
-        cycle_max,
+        cycle_max: s.cycle_max,
         iterations: orbit.iterations,
         residual: orbit.residual,
         monodromy: orbit.monodromy,
-        det_monodromy: det_monodromy(&orbit),
+        det_monodromy: s.det_monodromy,
         det_identity: orbit.det_identity,
-        det_relative_error: det_relative_error(&orbit),
+        det_relative_error: s.det_relative_error,
         guess,
         guess_source: source,
-        distance_to_guess: (orbit.x0 - guess.0).hypot(orbit.v0 - guess.1),
+        distance_to_guess: s.distance_to_guess,
     };
     if args.model.json {
         print_json(&report)
@@ -436,37 +431,15 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
 }
 
 fn branch_summary(v: f64, c: &Curves, omegas: &[f64]) -> BranchSummary {
-    match c {
-        Curves::Natural(b) => {
-            let covered: Vec<f64> = b
-                .slots
-                .iter()
-                .zip(omegas)
-                .filter(|(s, _)| !s.is_empty())
-                .map(|(_, &w)| w)
-                .collect();
-            BranchSummary {
-                velocity: v,
-                orbits: b.len(),
-                stable: b.stable(),
-                omega_min: covered.first().copied(),
-                omega_max: covered.last().copied(),
-                traces: None,
-                folds: None,
-            }
-        }
-        Curves::Arclength(traces) => {
-            let pts = || traces.iter().flatten();
-            BranchSummary {
-                velocity: v,
-                orbits: pts().count(),
-                stable: pts().filter(|p| p.stable).count(),
-                omega_min: pts().map(|p| p.omega).reduce(f64::min),
-                omega_max: pts().map(|p| p.omega).reduce(f64::max),
-                traces: Some(traces.len()),
-                folds: Some(traces.iter().map(|t| folds(t)).sum()),
-            }
-        }
+    let s = c.summary(omegas);
+    BranchSummary {
+        velocity: v,
+        orbits: s.orbits,
+        stable: s.stable,
+        omega_min: s.omega_min,
+        omega_max: s.omega_max,
+        traces: s.traces,
+        folds: s.folds,
     }
 }
 

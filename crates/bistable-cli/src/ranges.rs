@@ -7,7 +7,7 @@ use std::str::FromStr;
 use crate::error::CliError;
 
 /// Most values one range may have.
-pub const MAX_POINTS: usize = 10_000_000;
+pub use bistable_analysis::grid::MAX_POINTS;
 
 /// `N` evenly spaced values from `A` to `B`, both ends included (`N = 1`: just `A`).
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -23,13 +23,7 @@ pub struct Range {
 impl Range {
     /// The `i`-th value; exactly `start` and `end` at the ends.
     pub fn value(&self, i: usize) -> f64 {
-        if self.n == 1 || i == 0 {
-            self.start
-        } else if i + 1 == self.n {
-            self.end
-        } else {
-            self.start + (self.end - self.start) * (i as f64 / (self.n - 1) as f64)
-        }
+        bistable_analysis::grid::value(self.start, self.end, self.n, i)
     }
 
     /// All values in order.

@@ -3,7 +3,7 @@
 use clap::Args;
 use serde::Serialize;
 
-use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
+use bistable_analysis::thresholds::{check_restitution, interwell, quasi_static, single_impact};
 
 use crate::error::CliError;
 use crate::output::{print_json, print_text};
@@ -75,10 +75,7 @@ impl Thresholds {
 
 /// Runs `bistable thresholds`.
 pub fn run(args: &ThresholdsArgs) -> Result<(), CliError> {
-    let e = args.restitution;
-    if !(e.is_finite() && (0.0..1.0).contains(&e)) {
-        return Err(CliError::invalid("--restitution", e, "must be in [0, 1)"));
-    }
+    let e = check_restitution(args.restitution)?;
     if let Some(w) = args.omega {
         if !(w.is_finite() && w > 0.0) {
             return Err(CliError::invalid("--omega", w, "must be finite and > 0"));

@@ -7,23 +7,39 @@ the paper: time ``τ = ω0·t`` (one linear natural period is ``2π``), lengths 
 distance ``Δx`` (wells at 0 and 1, barrier at 1/2), velocities in ``ω0·Δx``, energies in
 ``k0·Δx²``; phases are shaker phases in cycles, ``[0, 1)``.
 
+What it offers mirrors the ``bistable`` CLI: :func:`simulate` and :class:`Simulator`;
+:func:`classify`, :func:`thresholds` and :func:`sweep.map <bistable_impact.sweep.map>` (local
+threads or a ``dask.distributed`` client); :func:`orbit`, :func:`continue_omega`,
+:func:`bifurcation`, :func:`energy_map` and :func:`spectrum` (module ``analyses``), which
+return the subcommands' JSON keys as dicts and their CSV files as pandas DataFrames;
+:func:`linspace` gives the values of the CLI's ``A:B:N`` ranges.
+
 Bad arguments raise ``ValueError`` (or ``TypeError`` for a wrong type) naming the argument, with
-the CLI's rule text; a failed simulation raises ``RuntimeError``. Computations release the GIL.
+the CLI's rule text; a failed simulation raises ``RuntimeError``. Computations release the GIL;
+Ctrl-C stops the sweeps, the continuation and the bifurcation data between points.
 """
 
 from __future__ import annotations
 
-from typing import Any, Dict, Iterator, List, Mapping, Optional
+from typing import Any, Dict, Optional
 
 import numpy as np
 
 from . import _native
 from ._native import Simulator
+from ._table import Table
+from .analyses import bifurcation, continue_omega, energy_map, orbit, spectrum
 
 __all__ = [
     "simulate",
     "classify",
     "thresholds",
+    "orbit",
+    "continue_omega",
+    "bifurcation",
+    "energy_map",
+    "spectrum",
+    "linspace",
     "Simulator",
     "SimulationResult",
     "Table",
@@ -33,41 +49,6 @@ __all__ = [
 
 #: Columns of :attr:`SimulationResult.impacts` (the CLI's impacts CSV header).
 IMPACT_COLUMNS = ("index", "t", "phase", "x", "v_before", "v_after", "delta_k")
-
-
-class Table(Mapping[str, np.ndarray]):
-    """Named numpy columns of equal length (``table['t']``), in a fixed column order.
-
-    ``len(table)`` is the number of rows; ``table.columns`` the names; ``to_pandas()`` a
-    DataFrame (needs pandas).
-    """
-
-    def __init__(self, columns: List[tuple]):
-        self._cols: Dict[str, np.ndarray] = {}
-        for name, dtype, data in columns:
-            self._cols[name] = np.frombuffer(data, dtype="<" + dtype).copy()
-
-    @property
-    def columns(self) -> List[str]:
-        return list(self._cols)
-
-    def __getitem__(self, name: str) -> np.ndarray:
-        return self._cols[name]
-
-    def __iter__(self) -> Iterator[str]:
-        return iter(self._cols)
-
-    def __len__(self) -> int:
-        first = next(iter(self._cols.values()), None)
-        return 0 if first is None else len(first)
-
-    def to_pandas(self):
-        import pandas as pd
-
-        return pd.DataFrame(self._cols)
-
-    def __repr__(self) -> str:
-        return f"Table({len(self)} rows: {', '.join(self._cols)})"
 
 
 class SimulationResult:
@@ -201,6 +182,12 @@ def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict
         omega: ``Ω`` (> 0), for the quasi-static threshold.
     """
     return _native.thresholds_of(restitution, omega)
+
+
+def linspace(start: float, end: float, n: int) -> np.ndarray:
+    """``n`` evenly spaced values from ``start`` to ``end``, both included exactly: the values
+    of the CLI's ``A:B:N`` ranges (one formula, ``bistable_analysis::grid``)."""
+    return np.array(_native.linspace(start, end, n), dtype=float)
 
 
 from . import sweep  # noqa: E402  (uses the functions above)

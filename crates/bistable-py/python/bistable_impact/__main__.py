@@ -8,6 +8,7 @@ the result is the map CSV (``--out``) or printed to stdout.
 from __future__ import annotations
 
 import argparse
+import math
 import sys
 from typing import List, Optional
 
@@ -18,14 +19,17 @@ def _range(text: str) -> List[float]:
         start, end, count = float(a), float(b), int(n)
     except ValueError:
         raise argparse.ArgumentTypeError(f"{text!r} is not A:B:N")
+    if not (math.isfinite(start) and math.isfinite(end)):
+        raise argparse.ArgumentTypeError(f"{text!r}: A and B must be finite")
     if count < 1:
         raise argparse.ArgumentTypeError(f"{text!r}: N must be >= 1")
-    if count == 1:
-        return [start]
-    return [
-        start if i == 0 else end if i == count - 1 else start + (end - start) * (i / (count - 1))
-        for i in range(count)
-    ]
+    if count == 1 and start != end:
+        raise argparse.ArgumentTypeError(f"{text!r}: N = 1 needs A = B (a single value)")
+    if count > 1 and start == end:
+        raise argparse.ArgumentTypeError(f"{text!r}: A = B needs N = 1")
+    from . import linspace
+
+    return list(linspace(start, end, count))
 
 
 def main(argv: Optional[List[str]] = None) -> int:
@@ -38,6 +42,7 @@ def main(argv: Optional[List[str]] = None) -> int:
     m.add_argument("--out", metavar="FILE.csv", help="map CSV (kept results are reused)")
     m.add_argument("--threads", type=int, default=0, help="local Rust threads (0: all cores)")
     m.add_argument("--chunk", type=int, default=16, help="points per Dask task")
+    m.add_argument("--progress", action="store_true", help="a progress line on stderr")
     m.add_argument("--zeta", type=float, default=0.02)
     m.add_argument("--restitution", type=float, default=0.85)
     m.add_argument("--tol", type=float, default=1e-16)
@@ -61,6 +66,7 @@ def main(argv: Optional[List[str]] = None) -> int:
             store=a.out,
             chunk=a.chunk,
             threads=a.threads,
+            progress=a.progress,
             zeta=a.zeta,
             restitution=a.restitution,
             tol=a.tol,

@@ -2,7 +2,7 @@
 
 from typing import Any, Callable, Dict, List, Optional, Tuple, Union
 
-Column = Tuple[str, str, bytes]  # name, numpy dtype without byte order ('f8' | 'i8'), LE data
+Column = Tuple[str, str, bytes]  # name, numpy dtype without byte order ('f8' | 'i8' | 'b1'), LE data
 Event = Dict[str, Any]
 
 #: Keys of the classify record, in order: the map CSV's columns.
@@ -44,8 +44,76 @@ def classify_many(
     period_tol: float = 1e-8,
     lyapunov_periods: int = 300,
     threads: int = 0,
+    progress: Optional[Callable[[int, int], Any]] = None,
+    on_record: Optional[Callable[[Dict[str, Any]], Any]] = None,
 ) -> List[Dict[str, Any]]: ...
 def thresholds_of(restitution: float = 0.85, omega: Optional[float] = None) -> Dict[str, Any]: ...
+def linspace(start: float, end: float, n: int) -> List[float]: ...
+
+# The analyses (see bistable_impact.analyses for the keys and units). Tables come as lists of
+# Column; "orbits" tables have a separate "cycle_max" list of lists (None for arclength).
+def orbit(
+    omega: float,
+    velocity: float,
+    period: int = 1,
+    guess: Optional[Tuple[float, float]] = None,
+    settle: int = 2000,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]: ...
+def continue_omega(
+    omega: List[float],
+    velocity: List[float],
+    period: int = 1,
+    settle: int = 2000,
+    method: str = "natural",
+    threads: int = 0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]: ...
+def bifurcation(
+    param: str,
+    values: List[float],
+    omega: Optional[float] = None,
+    velocity: Optional[float] = None,
+    transient: int = 500,
+    record: int = 100,
+    samples: int = 128,
+    branch_periods: List[int] = [1, 2, 4, 8],
+    threads: int = 0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]: ...
+def energy_map(
+    restitution: float = 0.85,
+    u_range: Optional[Tuple[float, float]] = None,
+    nx: int = 360,
+    ny: int = 300,
+    omega: Optional[float] = None,
+    velocity: Optional[float] = None,
+    periods: float = 200.0,
+    zeta: float = 0.02,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]: ...
+def spectrum(
+    omega: float,
+    velocity: float,
+    transient: int = 500,
+    record: int = 1024,
+    samples: int = 64,
+    max_freq: float = 5.0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]: ...
 
 class Simulator:
     """A stateful simulator of the model (nondimensional units, see the package docstring).

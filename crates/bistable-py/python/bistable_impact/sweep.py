@@ -3,7 +3,8 @@
 from __future__ import annotations
 
 import os
-from typing import Any, Optional, Sequence
+import sys
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
@@ -13,10 +14,57 @@ from . import _native
 #: ``bistable_analysis::record::COLUMNS``).
 COLUMNS = tuple(_native.COLUMNS)
 
+Point = Tuple[float, float]
+#: Finished points of a local sweep written to the store at a time.
+_STORE_BATCH = 64
+Progress = Callable[[int, int], Any]
 
-def _classify_chunk(points, options):
+
+def _classify_chunk(points: List[Point], options: Dict[str, Any]) -> List[Dict[str, Any]]:
     """Classifies a list of points on one Rust thread (a Dask task)."""
     return _native.classify_many(points, threads=1, **options)
+
+
+def _text_progress(done: int, total: int) -> None:
+    """``progress=True``: one updating line on stderr."""
+    end = "\n" if done == total else ""
+    print(f"\rmap: {done}/{total} points", end=end, file=sys.stderr, flush=True)
+
+
+class _Store:
+    """The map CSV that keeps results: rows are appended (and flushed to disk) as chunks
+    finish, so a crashed or interrupted sweep keeps them; the file is rewritten in grid order
+    at the end."""
+
+    def __init__(self, path: str, zeta: float, restitution: float):
+        import pandas as pd
+
+        self.path = path
+        self.done: Dict[Point, Dict[str, Any]] = {}
+        if os.path.exists(path) and os.path.getsize(path) > 0:
+            old = pd.read_csv(path)
+            if list(old.columns) != list(COLUMNS):
+                raise ValueError(
+                    f"store {path!r} does not have the map columns {','.join(COLUMNS)}"
+                )
+            same = (old["zeta"] == zeta) & (old["restitution"] == restitution)
+            for rec in old[same].to_dict("records"):
+                rec = {k: (None if pd.isna(x) else x) for k, x in rec.items()}
+                self.done[(rec["omega"], rec["velocity"])] = rec
+        else:
+            with open(path, "w") as f:
+                f.write(",".join(COLUMNS) + "\n")
+
+    def append(self, records: List[Dict[str, Any]]) -> None:
+        import pandas as pd
+
+        if not records:
+            return
+        rows = pd.DataFrame.from_records(records, columns=list(COLUMNS))
+        with open(self.path, "a", newline="") as f:
+            rows.to_csv(f, header=False, index=False)
+            f.flush()
+            os.fsync(f.fileno())
 
 
 def map(
@@ -26,6 +74,7 @@ def map(
     store: Optional[str] = None,
     chunk: int = 16,
     threads: int = 0,
+    progress: Union[bool, Progress] = False,
     zeta: float = 0.02,
     restitution: float = 0.85,
     tol: float = 1e-16,
@@ -44,17 +93,28 @@ def map(
     Args:
         omega, velocity: the grid's values of ``Ω`` (> 0) and ``V`` (>= 0).
         client: a ``dask.distributed`` Client: the points go to its workers in tasks of
-            ``chunk`` points (each on one thread); without it, ``threads`` Rust threads in this
-            process (0: all cores), with the GIL released.
-        store: a CSV file (the map CSV's columns) that keeps results: points already in it (same ``zeta``
-            and ``restitution``) are not computed again, and it is rewritten with the whole grid.
+            ``chunk`` points (each on one thread); tasks lost with a worker are run again by
+            Dask, and each point's result is taken once. Without a client, ``threads`` Rust
+            threads in this process (0: all cores), with the GIL released; Ctrl-C
+            (``KeyboardInterrupt``) stops the sweep after the points in progress.
+        store: a CSV file (the map CSV's columns) that keeps results: points already in it
+            (same ``zeta`` and ``restitution``) are not computed again; finished points are
+            appended to it as the sweep goes (with a client each task's rows when it is back,
+            without one every 64 points and when the sweep stops, also by Ctrl-C or an
+            error), so a crashed or interrupted sweep resumes with only the missing points;
+            at the end it is rewritten with the whole grid.
         chunk: points per Dask task (>= 1).
+        progress: ``True`` for a progress line on stderr, or a callable ``f(done, total)``
+            (points) called after each point (no client) or each finished task (client).
         Other arguments: as for :func:`bistable_impact.classify`.
     """
     import pandas as pd
 
     if not (isinstance(chunk, int) and chunk >= 1):
         raise ValueError(f"invalid value {chunk!r} for 'chunk': must be an integer >= 1")
+    report: Optional[Progress] = _text_progress if progress is True else (progress or None)
+    if report is not None and not callable(report):
+        raise TypeError(f"'progress' must be a bool or a callable, not {type(progress).__name__}")
     options = dict(
         zeta=zeta,
         restitution=restitution,
@@ -70,24 +130,42 @@ def map(
     v = np.atleast_1d(np.asarray(velocity, dtype=float))
     points = [(float(a), float(b)) for b in v for a in w]
     _native.classify_many([], **options)  # checks the options before any work is sent
-    done = {}
-    if store is not None and os.path.exists(store):
-        old = pd.read_csv(store)
-        if list(old.columns) != list(COLUMNS):
-            raise ValueError(f"store {store!r} does not have the map columns {','.join(COLUMNS)}")
-        same = (old["zeta"] == zeta) & (old["restitution"] == restitution)
-        for rec in old[same].to_dict("records"):
-            rec = {k: (None if pd.isna(x) else x) for k, x in rec.items()}
-            done[(rec["omega"], rec["velocity"])] = rec
+    kept = _Store(store, zeta, restitution) if store is not None else None
+    done: Dict[Point, Dict[str, Any]] = dict(kept.done) if kept else {}
     todo = [p for p in points if p not in done]
     if client is None:
-        records = _native.classify_many(todo, threads=threads, **options)
-    else:
+        pending: List[Dict[str, Any]] = []
+
+        def on_record(rec: Dict[str, Any]) -> None:
+            done[(rec["omega"], rec["velocity"])] = rec
+            if kept:
+                pending.append(rec)
+                if len(pending) >= _STORE_BATCH:
+                    kept.append(pending)
+                    pending.clear()
+
+        try:
+            _native.classify_many(
+                todo, threads=threads, progress=report, on_record=on_record, **options
+            )
+        finally:
+            if kept:  # also after Ctrl-C or an error: the finished points are kept
+                kept.append(pending)
+    elif todo:
+        from distributed import as_completed
+
         chunks = [todo[i : i + chunk] for i in range(0, len(todo), chunk)]
         futures = client.map(_classify_chunk, chunks, options=options, pure=False)
-        records = [r for part in client.gather(futures) for r in part]
-    for rec in records:
-        done[(rec["omega"], rec["velocity"])] = rec
+        finished = 0
+        for fut in as_completed(futures):
+            part = fut.result()
+            if kept:
+                kept.append(part)
+            for rec in part:
+                done[(rec["omega"], rec["velocity"])] = rec
+            finished += len(part)
+            if report is not None:
+                report(finished, len(todo))
     df = pd.DataFrame.from_records([done[p] for p in points], columns=list(COLUMNS))
     for c in ("period", "impacts_per_period", "snap_throughs", "final_well"):
         df[c] = df[c].astype("Int64")

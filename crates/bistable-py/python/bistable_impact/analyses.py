@@ -1,0 +1,310 @@
+"""The paper's analyses beyond classification, mirroring the CLI subcommands: ``orbit`` and
+``continue_omega`` (``bistable orbit``, with and without ``--continue-omega``), ``bifurcation``,
+``energy_map`` and ``spectrum``.
+
+Each returns a dict with the keys of the subcommand's ``--json`` output; what the subcommand
+writes as CSV comes as a pandas DataFrame with the CSV's columns (flags as ``bool``), grids as
+numpy arrays. Units as in the package docstring (``τ``, ``Δx``, ``ω0·Δx``, shaker cycles).
+"""
+
+from __future__ import annotations
+
+from typing import Any, Dict, Optional, Sequence, Tuple, Union
+
+import numpy as np
+
+from . import _native
+from ._table import Table
+
+__all__ = ["orbit", "continue_omega", "bifurcation", "energy_map", "spectrum"]
+
+#: Columns of the orbits DataFrames (the CLI's ``_orbits.csv``).
+ORBIT_COLUMNS = (
+    "omega", "velocity", "period", "stable", "x0", "v0", "max_x", "cycle_max",
+    "multiplier_1_re", "multiplier_1_im", "multiplier_2_re", "multiplier_2_im",
+    "abs_multiplier", "impacts", "snap_throughs", "sticks",
+)  # fmt: skip
+
+#: Columns of ``continue_omega(method='arclength')['orbits']`` (the CLI's ``--arclength`` CSV).
+ARC_COLUMNS = (
+    "velocity", "trace", "index", "omega", "x0", "v0", "max_x", "stable", "multiplier_1_re",
+    "multiplier_1_im", "multiplier_2_re", "multiplier_2_im", "abs_multiplier", "impacts",
+)  # fmt: skip
+
+def _orbits_frame(raw: Dict[str, Any]):
+    """The orbits table with its ``cycle_max`` lists, in the CSV's column order."""
+    df = Table(raw.pop("orbits")).to_pandas()
+    cycle_max = raw.pop("cycle_max")
+    if cycle_max is not None:
+        df.insert(7, "cycle_max", [np.asarray(c, dtype=float) for c in cycle_max])
+    return df
+
+
+def orbit(
+    omega: float,
+    velocity: float,
+    period: int = 1,
+    guess: Optional[Tuple[float, float]] = None,
+    settle: int = 2000,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]:
+    """A periodic orbit by shooting, as ``bistable orbit --json``: Newton's method on the map
+    over ``period`` shaker periods from plate phase 0 to plate phase 0, with the monodromy
+    matrix ``M`` from the variational equations.
+
+    Returns the CLI's keys: ``omega, velocity, period, x0, v0`` (fixed point at plate phase 0,
+    ``Δx`` and ``ω0·Δx``), ``multipliers`` (list of ``{re, im, abs}``, largest first),
+    ``max_abs_multiplier, stable`` (all ``|λ| < 1``), ``floquet_exponent`` (``ln|λ|max/(pT)``
+    per unit of ``τ``), ``impacts, sticks, snap_throughs, max_x, cycle_max`` (largest ``x`` of
+    each cycle, ascending), ``iterations, residual, monodromy`` (2×2 numpy array),
+    ``det_monodromy, det_identity`` (``e^(2·impacts)·exp(−2ζpT)``), ``det_relative_error``
+    (None when the orbit sticks), ``guess, guess_source, distance_to_guess``.
+
+    Args:
+        omega, velocity: the shaker (``Ω > 0``, ``V >= 0``).
+        period: period of the orbit in shaker periods, ``[1, 64]``.
+        guess: ``(x, x')`` at plate phase 0 to start Newton from; default: the section point
+            after ``settle`` shaker periods from the paper's initial condition.
+        settle: shaker periods simulated for the default guess.
+        zeta, restitution, tol, chatter: the model and solver, as for
+            :func:`bistable_impact.simulate`.
+
+    Raises:
+        ValueError: a bad argument (named). RuntimeError: Newton failed (``no P-periodic orbit
+        found from (x, v): ...``) or the simulation failed.
+    """
+    if guess is not None:
+        if isinstance(guess, (str, bytes)) or len(guess) != 2:
+            raise ValueError(f"invalid value {guess!r} for 'guess': must be two finite numbers")
+        guess = (guess[0], guess[1])
+    d = _native.orbit(
+        omega,
+        velocity,
+        period=period,
+        guess=guess,
+        settle=settle,
+        zeta=zeta,
+        restitution=restitution,
+        tol=tol,
+        chatter=chatter,
+    )
+    d["monodromy"] = np.asarray(d["monodromy"], dtype=float)
+    return d
+
+
+def continue_omega(
+    omega: Sequence[float],
+    velocity: Union[float, Sequence[float]],
+    period: int = 1,
+    settle: int = 2000,
+    method: str = "natural",
+    threads: int = 0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]:
+    """Branches of ``period``-periodic orbits continued in ``Ω`` for each ``V``, as ``bistable
+    orbit --continue-omega ... --json`` (the paper's Fig. 11a). At every ``Ω`` a simulation of
+    ``settle`` shaker periods seeds the orbits, which are continued point to point in both
+    directions (``method='natural'``) or followed through folds by pseudo-arclength
+    continuation in ``(x, x', Ω)`` (``method='arclength'``, step at most the grid spacing).
+
+    Returns the CLI's JSON keys ``period, method ('natural'|'pseudo-arclength'), omega_range
+    ('A:B:N'), branches`` (per ``V``: ``velocity, orbits, stable, omega_min, omega_max,
+    traces, folds``; the last two None for natural continuation) and ``orbits``: a DataFrame
+    with the CLI's ``--out`` CSV columns (:data:`ORBIT_COLUMNS`, one row per orbit, for natural
+    continuation; :data:`ARC_COLUMNS`, one row per trace point, for arclength).
+
+    Args:
+        omega: the grid of ``Ω`` (> 0), evenly spaced (e.g. :func:`bistable_impact.linspace`).
+        velocity: one ``V`` or several.
+        period: ``[1, 64]`` shaker periods.
+        settle: shaker periods simulated at every ``Ω`` for the seeds.
+        method: ``'natural'`` or ``'arclength'``.
+        threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
+        zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
+    """
+    vs = [float(velocity)] if np.ndim(velocity) == 0 else [float(v) for v in velocity]
+    d = _native.continue_omega(
+        [float(w) for w in np.atleast_1d(omega)],
+        vs,
+        period=period,
+        settle=settle,
+        method=method,
+        threads=threads,
+        zeta=zeta,
+        restitution=restitution,
+        tol=tol,
+        chatter=chatter,
+    )
+    d["orbits"] = _orbits_frame(d)
+    return d
+
+
+#: ``kind`` values of the bifurcation data, by the code the native module uses.
+_KINDS = np.array(["max_x", "impact_phase"], dtype=object)
+
+
+def bifurcation(
+    param: str,
+    values: Sequence[float],
+    omega: Optional[float] = None,
+    velocity: Optional[float] = None,
+    transient: int = 500,
+    record: int = 100,
+    samples: int = 128,
+    branch_periods: Sequence[int] = (1, 2, 4, 8),
+    threads: int = 0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]:
+    """Bifurcation data against ``Ω`` (``param='omega'``, at fixed ``velocity``) or ``V``
+    (``param='velocity'``, at fixed ``omega``), as ``bistable bifurcation --json --out``
+    (the paper's Fig. 6/8). At each value the paper's initial condition runs ``transient``
+    shaker periods, then ``record`` periods are recorded: the largest ``x`` of each cycle and
+    the phase of every impact. Periodic-orbit branches of ``branch_periods`` are found by
+    shooting from the attractors and continued along the grid.
+
+    Returns the CLI's JSON keys ``param, range ('A:B:N'), transient, record, points`` (per
+    value: ``omega, velocity, period`` (None: none up to 16), ``distinct_max_x,
+    impacts_per_cycle``), ``branches`` (per period: ``period, orbits, stable, links``),
+    ``wall_time_s`` (s), and the CSVs as DataFrames: ``data`` (``omega, velocity, kind
+    ('max_x'|'impact_phase'), cycle, value``: ``x`` in ``Δx`` or phase in cycles; cycles count
+    from 0 at the end of the transient) and ``orbits`` (:data:`ORBIT_COLUMNS`).
+
+    Args:
+        param: ``'omega'`` or ``'velocity'``.
+        values: the values of the control parameter (``Ω > 0`` or ``V >= 0``).
+        omega, velocity: the fixed parameter.
+        transient, record: shaker periods skipped and recorded (``record >= 1``,
+            ``record·len(values) <= 1e8``).
+        samples: dense-output samples per shaker period for the maxima (>= 8).
+        branch_periods: periods of the orbit branches (each ``[1, 64]``); empty: none.
+        threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
+        zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
+    """
+    d = _native.bifurcation(
+        param,
+        [float(x) for x in np.atleast_1d(values)],
+        omega=omega,
+        velocity=velocity,
+        transient=transient,
+        record=record,
+        samples=samples,
+        branch_periods=[int(p) for p in branch_periods],
+        threads=threads,
+        zeta=zeta,
+        restitution=restitution,
+        tol=tol,
+        chatter=chatter,
+    )
+    data = Table(d.pop("data")).to_pandas()
+    data["kind"] = _KINDS[data["kind"].to_numpy()]
+    d["data"] = data
+    d["orbits"] = _orbits_frame(d)
+    return d
+
+
+def energy_map(
+    restitution: float = 0.85,
+    u_range: Optional[Tuple[float, float]] = None,
+    nx: int = 360,
+    ny: int = 300,
+    omega: Optional[float] = None,
+    velocity: Optional[float] = None,
+    periods: float = 200.0,
+    zeta: float = 0.02,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]:
+    """The kinetic energy change of an impact normalised by the first impact's (Eq. 13),
+    ``ΔK/ΔK0 = (((1+e)·cos φ − e·u)² − u²)/(1+e)²`` with ``u = x'₋/V``, on the grid that
+    ``bistable energy-map`` draws; with ``omega`` and ``velocity`` also the impacts of a run
+    from the paper's initial condition over ``periods`` natural periods (its ``--overlay``).
+
+    Returns ``restitution``, ``u_range`` ``(lo, hi)``, ``phase`` (``nx`` cell centres of
+    ``φ/2π`` in ``[0, 1)``, cycles), ``u`` (``ny`` cell centres), ``ratio`` (``nx × ny``
+    array of ``ΔK/ΔK0``, NaN where no contact is possible, ``u > cos φ``), ``max_abs`` (largest
+    ``|ratio|``, at least 1) and ``impacts`` (DataFrame ``phase, u, time_fraction``, or None).
+
+    Args:
+        restitution: ``e`` in ``[0, 1)``.
+        u_range: ``(lo, hi)`` of ``u``; default: up to 1.5 and down to below the neutral line
+            ``u = −(1+e)/(1−e)·cos φ`` at ``φ = 0`` (with impacts: below the lowest one).
+        nx, ny: cells along the phase and along ``u`` (the CLI draws 360 × 300;
+            ``nx·ny <= 1e7``).
+        omega, velocity: the overlaid run (``Ω > 0``, ``V > 0``; both or neither).
+        periods: natural periods of the overlaid run (> 0).
+        zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`.
+    """
+    d = _native.energy_map(
+        restitution,
+        u_range=u_range,
+        nx=nx,
+        ny=ny,
+        omega=omega,
+        velocity=velocity,
+        periods=periods,
+        zeta=zeta,
+        tol=tol,
+        chatter=chatter,
+    )
+    d["phase"] = Table(d["phase"])["phase"]
+    d["u"] = Table(d["u"])["u"]
+    d["ratio"] = Table(d["ratio"])["ratio"].reshape(d.pop("shape"))
+    if d["impacts"] is not None:
+        d["impacts"] = Table(d["impacts"]).to_pandas()
+    return d
+
+
+def spectrum(
+    omega: float,
+    velocity: float,
+    transient: int = 500,
+    record: int = 1024,
+    samples: int = 64,
+    max_freq: float = 5.0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Dict[str, Any]:
+    """The amplitude spectrum of the steady-state displacement ``x(τ)``, as ``bistable
+    spectrum --json --out``: ``transient`` shaker periods skipped, ``x`` sampled ``samples``
+    times per shaker period over ``record`` periods, mean removed, Hann window, FFT.
+
+    Returns the CLI's JSON keys ``omega, velocity, transient, record, samples_per_period,
+    period`` (on the stroboscopic section, None: none up to 16), ``spectral_flatness``
+    (geometric over arithmetic mean of the power up to ``max_freq``: near 0 for lines),
+    ``peak_freq_over_omega, peak_amplitude`` (``Δx``) and ``spectrum``: a DataFrame
+    ``freq_over_omega, amplitude`` (frequency in units of ``Ω``, amplitude of a sinusoid at it
+    in ``Δx``), one row per FFT bin up to the Nyquist frequency ``samples/2``.
+
+    Args:
+        omega, velocity: the shaker.
+        transient: shaker periods skipped.
+        record: shaker periods sampled (>= 8; resolution ``Ω/record``).
+        samples: samples per shaker period (>= 4; ``record·samples <= 2^26``).
+        max_freq: highest frequency (units of ``Ω``, > 0) of the flatness.
+        zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
+    """
+    d = _native.spectrum(
+        omega,
+        velocity,
+        transient=transient,
+        record=record,
+        samples=samples,
+        max_freq=max_freq,
+        zeta=zeta,
+        restitution=restitution,
+        tol=tol,
+        chatter=chatter,
+    )
+    d["spectrum"] = Table(d["spectrum"]).to_pandas()
+    return d

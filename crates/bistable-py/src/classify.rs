@@ -1,0 +1,160 @@
+//! `classify`, the point lists of `sweep.map` (`classify_many`) and `thresholds`.
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use bistable_analysis::record::Record;
+use bistable_analysis::sweep::{classify_point, classify_points};
+use bistable_analysis::thresholds::{self, check_restitution};
+use bistable_core::{ClassifyOptions, Sinusoid};
+
+use crate::common::{
+    check_signals, model, param_err, positive, record_dict, sim_err, threads as threads_arg, Stop,
+};
+
+#[allow(clippy::too_many_arguments)]
+fn classify_options(
+    py: Python<'_>,
+    max_periods: f64,
+    full: bool,
+    max_period: u32,
+    period_tol: f64,
+    lyapunov_periods: u32,
+) -> PyResult<ClassifyOptions> {
+    ClassifyOptions {
+        max_natural_periods: max_periods,
+        full_length: full,
+        max_period,
+        period_tol,
+        lyapunov_periods,
+    }
+    .check()
+    .map_err(|e| param_err(py, &e))
+}
+
+/// The response class at one point (see `bistable_impact.classify`).
+#[pyfunction]
+#[pyo3(signature = (omega, velocity, zeta=0.02, restitution=0.85, tol=1e-16,
+    chatter="accumulation", max_periods=20000.0, full=false, max_period=16, period_tol=1e-8,
+    lyapunov_periods=2000))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn classify<'py>(
+    py: Python<'py>,
+    omega: f64,
+    velocity: f64,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+    max_periods: f64,
+    full: bool,
+    max_period: u32,
+    period_tol: f64,
+    lyapunov_periods: u32,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
+    let co = classify_options(
+        py,
+        max_periods,
+        full,
+        max_period,
+        period_tol,
+        lyapunov_periods,
+    )?;
+    let point = py
+        .allow_threads(|| classify_point(&m, co))
+        .map_err(|e| sim_err(py, &e))?;
+    record_dict(py, &Record::new(&point))
+}
+
+/// Classifies every `(omega, velocity)` of `points` on `threads` threads (0: all cores); the
+/// records in the order of `points`; a point that fails raises. After each point, Python's
+/// signal handlers run (Ctrl-C raises `KeyboardInterrupt` and stops the sweep), `on_record`, if
+/// given, is called with the point's record (a dict) and `progress`, if given, with
+/// `(points done, points)`; an exception from either stops the sweep.
+#[pyfunction]
+#[pyo3(signature = (points, zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation",
+    max_periods=20000.0, full=false, max_period=16, period_tol=1e-8, lyapunov_periods=300,
+    threads=0, progress=None, on_record=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn classify_many<'py>(
+    py: Python<'py>,
+    points: Vec<(f64, f64)>,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+    max_periods: f64,
+    full: bool,
+    max_period: u32,
+    period_tol: f64,
+    lyapunov_periods: u32,
+    threads: usize,
+    progress: Option<Py<PyAny>>,
+    on_record: Option<Py<PyAny>>,
+) -> PyResult<Bound<'py, PyList>> {
+    let first = points.first().copied().unwrap_or((1.0, 0.0));
+    let m = model(py, first.0, first.1, zeta, restitution, tol, chatter)?;
+    for &(w, v) in &points {
+        Sinusoid::new(w, v).map_err(|e| param_err(py, &e))?;
+    }
+    let co = classify_options(
+        py,
+        max_periods,
+        full,
+        max_period,
+        period_tol,
+        lyapunov_periods,
+    )?;
+    let threads = threads_arg(py, threads)?;
+    let mut records: Vec<Option<Record>> = vec![None; points.len()];
+    let (mut done, total) = (0usize, points.len());
+    py.allow_threads(|| {
+        classify_points(&m, &points, co, threads, |i, r| {
+            let record = Record::new(&r?);
+            done += 1;
+            check_signals()?;
+            if on_record.is_some() || progress.is_some() {
+                Python::with_gil(|py| -> PyResult<()> {
+                    if let Some(f) = &on_record {
+                        f.call1(py, (record_dict(py, &record)?,))?;
+                    }
+                    if let Some(f) = &progress {
+                        f.call1(py, (done, total))?;
+                    }
+                    Ok(())
+                })
+                .map_err(Stop::Py)?;
+            }
+            records[i] = Some(record);
+            Ok::<(), Stop>(())
+        })
+    })
+    .map_err(|e| e.into_py(py))?;
+    let out = PyList::empty(py);
+    for r in records.iter().flatten() {
+        out.append(record_dict(py, r)?)?;
+    }
+    Ok(out)
+}
+
+/// The velocity thresholds of Eq. 16–18 (see `bistable_impact.thresholds`).
+#[pyfunction]
+#[pyo3(signature = (restitution=0.85, omega=None))]
+pub(crate) fn thresholds_of<'py>(
+    py: Python<'py>,
+    restitution: f64,
+    omega: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let e = check_restitution(restitution).map_err(|e| param_err(py, &e))?;
+    if let Some(w) = omega {
+        positive(py, "omega", w)?;
+    }
+    let d = PyDict::new(py);
+    d.set_item("restitution", e)?;
+    d.set_item("single_impact", thresholds::single_impact(e))?;
+    d.set_item("interwell", thresholds::interwell(e))?;
+    d.set_item("omega", omega)?;
+    d.set_item("quasi_static", omega.map(thresholds::quasi_static))?;
+    Ok(d)
+}

@@ -1,0 +1,472 @@
+//! `simulate` and the stateful `Simulator`.
+
+use std::f64::consts::TAU;
+use std::ops::ControlFlow;
+use std::time::{Instant as WallClock, SystemTime, UNIX_EPOCH};
+
+use pyo3::exceptions::PyValueError;
+use pyo3::prelude::*;
+use pyo3::types::{PyBytes, PyDict, PyList};
+
+use bistable_analysis::schedule::Schedule;
+use bistable_core::{
+    Checkpoint, ContactMode, Event, Observer, SimError, Simulator, State, StickCause,
+};
+
+use crate::common::{invalid, model, positive, sim_err, table, Col};
+
+/// Most trace rows one `simulate` call may return (memory: 40 bytes a row).
+const MAX_TRACE_ROWS: f64 = 1e8;
+/// Time units simulated between two checks for Python signals (Ctrl-C), with the GIL released
+/// in between (about a millisecond of work for the paper's cases).
+const CHUNK: f64 = 1000.0;
+fn mode_name(m: ContactMode) -> &'static str {
+    match m {
+        ContactMode::Free => "free",
+        ContactMode::Sticking => "sticking",
+    }
+}
+
+fn cause_name(c: StickCause) -> &'static str {
+    match c {
+        StickCause::Accumulation => "accumulation",
+        StickCause::FixedGap => "fixed_gap",
+        StickCause::Plastic => "plastic",
+        StickCause::ZenoGuard => "zeno_guard",
+    }
+}
+
+/// Seconds since the Unix epoch (to compare instants between threads).
+fn epoch_s() -> f64 {
+    SystemTime::now()
+        .duration_since(UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64())
+}
+
+/// Everything `simulate` returns, gathered from the event stream.
+#[derive(Default)]
+struct Log {
+    /// `index, t, phase, x, v_before, v_after, delta_k`.
+    impacts: [Col; 7],
+    /// `start, end, x_start, x_end` (NaN: still open).
+    sticking: [Col; 4],
+    /// `t, v, to_well`.
+    snaps: [Col; 3],
+    open_stick: Option<(f64, f64)>,
+    impacts_n: u64,
+    sticks_n: u64,
+    snaps_n: u64,
+    last_impact: Option<bistable_core::Impact>,
+}
+
+impl Log {
+    fn stick_row(&mut self, start: f64, end: f64, x0: f64, x1: f64) {
+        let [a, b, c, d] = &mut self.sticking;
+        a.f(start);
+        b.f(end);
+        c.f(x0);
+        d.f(x1);
+    }
+}
+
+impl Observer for Log {
+    fn event(&mut self, event: &Event) -> ControlFlow<()> {
+        match *event {
+            Event::Impact(i) => {
+                self.impacts_n += 1;
+                self.last_impact = Some(i);
+                let c = &mut self.impacts;
+                c[0].i(i.index as i64);
+                c[1].f(i.t);
+                c[2].f(i.phase.unwrap_or(f64::NAN));
+                c[3].f(i.x);
+                c[4].f(i.v_before);
+                c[5].f(i.v_after);
+                c[6].f(i.delta_k);
+            }
+            Event::StickStart { t, x, .. } => {
+                self.sticks_n += 1;
+                if let Some((t0, x0)) = self.open_stick.replace((t, x)) {
+                    // A second start without an end closes the first where the next begins.
+                    self.stick_row(t0, t, x0, x);
+                }
+            }
+            Event::StickEnd { t, x, .. } => {
+                let (t0, x0) = self.open_stick.take().unwrap_or((f64::NAN, f64::NAN));
+                self.stick_row(t0, t, x0, x);
+            }
+            Event::SnapThrough { t, v, to } => {
+                self.snaps_n += 1;
+                self.snaps[0].f(t);
+                self.snaps[1].f(v);
+                self.snaps[2].i(i64::from(to.number()));
+            }
+        }
+        ControlFlow::Continue(())
+    }
+}
+
+fn state_dict<'py>(py: Python<'py>, s: &State) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item("t", s.t)?;
+    d.set_item("x", s.x)?;
+    d.set_item("v", s.v)?;
+    d.set_item("z", s.z)?;
+    d.set_item("zdot", s.zdot)?;
+    d.set_item("mode", mode_name(s.mode))?;
+    d.set_item("well", s.well.number())?;
+    d.set_item("kinetic_energy", s.kinetic_energy())?;
+    d.set_item("potential_energy", s.potential_energy())?;
+    Ok(d)
+}
+
+fn event_dict<'py>(py: Python<'py>, e: &Event) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    match *e {
+        Event::Impact(i) => {
+            d.set_item("kind", "impact")?;
+            d.set_item("index", i.index)?;
+            d.set_item("t", i.t)?;
+            d.set_item("phase", i.phase)?;
+            d.set_item("x", i.x)?;
+            d.set_item("v_before", i.v_before)?;
+            d.set_item("v_after", i.v_after)?;
+            d.set_item("zdot", i.zdot)?;
+            d.set_item("delta_k", i.delta_k)?;
+        }
+        Event::StickStart {
+            t,
+            x,
+            cause,
+            impacts,
+        } => {
+            d.set_item("kind", "stick_start")?;
+            d.set_item("t", t)?;
+            d.set_item("x", x)?;
+            d.set_item("cause", cause_name(cause))?;
+            d.set_item("impacts", impacts)?;
+        }
+        Event::StickEnd { t, x, v } => {
+            d.set_item("kind", "stick_end")?;
+            d.set_item("t", t)?;
+            d.set_item("x", x)?;
+            d.set_item("v", v)?;
+        }
+        Event::SnapThrough { t, v, to } => {
+            d.set_item("kind", "snap_through")?;
+            d.set_item("t", t)?;
+            d.set_item("v", v)?;
+            d.set_item("to_well", to.number())?;
+        }
+    }
+    Ok(d)
+}
+
+/// One run from the paper's initial condition (see `bistable_impact.simulate`).
+#[pyfunction]
+#[pyo3(signature = (omega, velocity, t_end=None, periods=None, zeta=0.02, restitution=0.85,
+    tol=1e-16, chatter="accumulation", trace_dt=None))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn simulate<'py>(
+    py: Python<'py>,
+    omega: f64,
+    velocity: f64,
+    t_end: Option<f64>,
+    periods: Option<f64>,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+    trace_dt: Option<f64>,
+) -> PyResult<Bound<'py, PyDict>> {
+    let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
+    let t_end = match (t_end, periods) {
+        (Some(t), None) => positive(py, "t_end", t)?,
+        (None, Some(n)) => {
+            let t = positive(py, "periods", n)? * TAU;
+            if !t.is_finite() {
+                return Err(invalid(py, "periods", n, "too large (2π·N overflows)"));
+            }
+            t
+        }
+        _ => {
+            return Err(PyValueError::new_err(
+                "exactly one of 't_end' and 'periods' must be given",
+            ))
+        }
+    };
+    let mut trace = match trace_dt {
+        Some(h) => {
+            let h = positive(py, "trace_dt", h)?;
+            let rows = t_end / h;
+            if rows > MAX_TRACE_ROWS {
+                let rule = format!(
+                    "too small for a run up to τ = {t_end}: {rows:.3e} rows (at most {MAX_TRACE_ROWS:e})"
+                );
+                return Err(invalid(py, "trace_dt", h, &rule));
+            }
+            Schedule::new(h, 0.0, t_end)
+        }
+        None => Schedule::none(),
+    };
+    let mut sim = m.simulator().map_err(|e| sim_err(py, &e))?;
+    let mut log = Log::default();
+    let mut tr: [Col; 5] = Default::default();
+    let started_at = epoch_s();
+    let clock = WallClock::now();
+    let mut reached = 0.0;
+    while reached < t_end {
+        let until = (reached + CHUNK).min(t_end);
+        py.allow_threads(|| -> Result<(), SimError> {
+            while let Some(next) = trace.peek().filter(|&t| t <= until) {
+                sim.advance(next, &mut log)?;
+                trace.take(next);
+                let s = sim.state();
+                for (c, v) in tr.iter_mut().zip([s.t, s.x, s.v, s.z, s.zdot]) {
+                    c.f(v);
+                }
+            }
+            sim.advance(until, &mut log).map(|_| ())
+        })
+        .map_err(|e| sim_err(py, &e))?;
+        reached = until;
+        py.check_signals()?;
+    }
+    let wall_time_s = clock.elapsed().as_secs_f64();
+    let finished_at = epoch_s();
+    let fin = sim.state();
+    if let Some((t0, x0)) = log.open_stick.take() {
+        log.stick_row(t0, f64::NAN, x0, f64::NAN);
+    }
+
+    let out = PyDict::new(py);
+    let [index, t, phase, x, vb, va, dk] = std::mem::take(&mut log.impacts);
+    out.set_item(
+        "impacts",
+        table(
+            py,
+            vec![
+                ("index", "i8", index),
+                ("t", "f8", t),
+                ("phase", "f8", phase),
+                ("x", "f8", x),
+                ("v_before", "f8", vb),
+                ("v_after", "f8", va),
+                ("delta_k", "f8", dk),
+            ],
+        )?,
+    )?;
+    let [s0, s1, x0, x1] = std::mem::take(&mut log.sticking);
+    out.set_item(
+        "sticking",
+        table(
+            py,
+            vec![
+                ("start", "f8", s0),
+                ("end", "f8", s1),
+                ("x_start", "f8", x0),
+                ("x_end", "f8", x1),
+            ],
+        )?,
+    )?;
+    let [st, sv, sw] = std::mem::take(&mut log.snaps);
+    out.set_item(
+        "snaps",
+        table(
+            py,
+            vec![("t", "f8", st), ("v", "f8", sv), ("to_well", "i8", sw)],
+        )?,
+    )?;
+    if trace_dt.is_some() {
+        let names = ["t", "x", "v", "z", "zdot"];
+        let cols = names.into_iter().zip(tr).map(|(n, c)| (n, "f8", c));
+        out.set_item("trace", table(py, cols.collect())?)?;
+    } else {
+        out.set_item("trace", py.None())?;
+    }
+    let fs = state_dict(py, &fin)?;
+    out.set_item("final_state", &fs)?;
+
+    let s = PyDict::new(py);
+    s.set_item("omega", m.omega())?;
+    s.set_item("velocity", m.velocity())?;
+    s.set_item("zeta", m.params.zeta())?;
+    s.set_item("restitution", m.restitution())?;
+    s.set_item("tol", m.opts.tol())?;
+    s.set_item("chatter", chatter)?;
+    s.set_item("t_end", t_end)?;
+    s.set_item("natural_periods", t_end / TAU)?;
+    s.set_item("shaker_periods", t_end / m.shaker_period())?;
+    s.set_item("impacts", log.impacts_n)?;
+    s.set_item("sticking_intervals", log.sticks_n)?;
+    s.set_item("snap_throughs", log.snaps_n)?;
+    s.set_item("final_well", fin.well.number())?;
+    s.set_item("final_state", fs)?;
+    match log.last_impact {
+        Some(i) => {
+            let e = event_dict(py, &Event::Impact(i))?;
+            e.del_item("kind")?;
+            e.del_item("zdot")?;
+            s.set_item("last_impact", e)?;
+        }
+        None => s.set_item("last_impact", py.None())?,
+    }
+    s.set_item("wall_time_s", wall_time_s)?;
+    s.set_item("steps", sim.stats().steps)?;
+    s.set_item("started_at", started_at)?;
+    s.set_item("finished_at", finished_at)?;
+    out.set_item("summary", s)?;
+    Ok(out)
+}
+
+/// Passes events to a Python callable; a `False` answer or an exception stops the advance.
+struct Callback<'a> {
+    f: &'a Py<PyAny>,
+    error: Option<PyErr>,
+}
+
+impl Observer for Callback<'_> {
+    fn event(&mut self, event: &Event) -> ControlFlow<()> {
+        Python::with_gil(|py| {
+            let r = event_dict(py, event).and_then(|d| self.f.call1(py, (d,)));
+            match r {
+                Ok(v) if v.bind(py).is(pyo3::types::PyBool::new(py, false)) => {
+                    ControlFlow::Break(())
+                }
+                Ok(_) => ControlFlow::Continue(()),
+                Err(e) => {
+                    self.error = Some(e);
+                    ControlFlow::Break(())
+                }
+            }
+        })
+    }
+}
+
+/// A stateful simulator (see `bistable_impact.Simulator`).
+#[pyclass(module = "bistable_impact", name = "Simulator")]
+pub(crate) struct PySimulator {
+    sim: Simulator,
+}
+
+#[pymethods]
+impl PySimulator {
+    #[new]
+    #[pyo3(signature = (omega, velocity, zeta=0.02, restitution=0.85, tol=1e-16,
+        chatter="accumulation", t0=0.0, x0=0.0, v0=0.0))]
+    #[allow(clippy::too_many_arguments)]
+    fn new(
+        py: Python<'_>,
+        omega: f64,
+        velocity: f64,
+        zeta: f64,
+        restitution: f64,
+        tol: f64,
+        chatter: &str,
+        t0: f64,
+        x0: f64,
+        v0: f64,
+    ) -> PyResult<Self> {
+        let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
+        let sim = Simulator::with_state(m.params, m.shaker.into(), m.opts, t0, x0, v0)
+            .map_err(|e| sim_err(py, &e))?;
+        Ok(Self { sim })
+    }
+
+    /// Advances to `t`; see the stub for the callback protocol.
+    #[pyo3(signature = (t, callback=None))]
+    fn advance_to(
+        &mut self,
+        py: Python<'_>,
+        t: f64,
+        callback: Option<Py<PyAny>>,
+    ) -> PyResult<PyObject> {
+        let sim = &mut self.sim;
+        match callback {
+            Some(f) => {
+                let mut cb = Callback { f: &f, error: None };
+                let r = py.allow_threads(|| sim.advance(t, &mut cb));
+                if let Some(e) = cb.error {
+                    return Err(e);
+                }
+                let reached = r.map_err(|e| sim_err(py, &e))?;
+                Ok(reached.into_pyobject(py)?.to_owned().into_any().unbind())
+            }
+            None => {
+                let events = py
+                    .allow_threads(|| sim.events_until(t))
+                    .map_err(|e| sim_err(py, &e))?;
+                let out = PyList::empty(py);
+                for e in &events {
+                    out.append(event_dict(py, e)?)?;
+                }
+                Ok(out.into_any().unbind())
+            }
+        }
+    }
+
+    /// The state now: `t, x, v, z, zdot, mode, well, kinetic_energy, potential_energy`.
+    fn state<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        state_dict(py, &self.sim.state())
+    }
+
+    /// Current time τ.
+    #[getter]
+    fn time(&self) -> f64 {
+        self.sim.time()
+    }
+
+    /// Work counters: steps, impacts, sticks, snap_throughs.
+    fn stats<'py>(&self, py: Python<'py>) -> PyResult<Bound<'py, PyDict>> {
+        let s = self.sim.stats();
+        let d = PyDict::new(py);
+        d.set_item("steps", s.steps)?;
+        d.set_item("impacts", s.impacts)?;
+        d.set_item("sticks", s.sticks)?;
+        d.set_item("snap_throughs", s.snap_throughs)?;
+        Ok(d)
+    }
+
+    /// Switches to a sinusoidal shaker `(omega, velocity)` now, continuing the plate.
+    fn set_sinusoid(&mut self, py: Python<'_>, omega: f64, velocity: f64) -> PyResult<()> {
+        self.sim
+            .set_sinusoid(omega, velocity)
+            .map_err(|e| sim_err(py, &e))
+    }
+
+    /// The complete state as bytes (versioned, checksummed format of `bistable_core::codec`).
+    fn checkpoint<'py>(&self, py: Python<'py>) -> Bound<'py, PyBytes> {
+        PyBytes::new(py, &self.sim.checkpoint().to_bytes())
+    }
+
+    /// A simulator that continues exactly as the one `data` was taken from.
+    #[staticmethod]
+    fn from_checkpoint(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
+        let c = Checkpoint::from_bytes(data).map_err(PyValueError::new_err)?;
+        let sim = Simulator::from_checkpoint(&c).map_err(|e| match e {
+            SimError::Param(p) => PyValueError::new_err(format!("invalid checkpoint: {p}")),
+            other => sim_err(py, &other),
+        })?;
+        Ok(Self { sim })
+    }
+
+    fn __reduce__<'py>(
+        &self,
+        py: Python<'py>,
+    ) -> PyResult<(Bound<'py, PyAny>, (Bound<'py, PyBytes>,))> {
+        let f = py.get_type::<PySimulator>().getattr("from_checkpoint")?;
+        Ok((f, (self.checkpoint(py),)))
+    }
+
+    fn __repr__(&self) -> String {
+        let s = self.sim.state();
+        format!(
+            "Simulator(t={}, x={}, v={}, mode={}, well={})",
+            s.t,
+            s.x,
+            s.v,
+            mode_name(s.mode),
+            s.well.number()
+        )
+    }
+}
