@@ -37,6 +37,7 @@ pub mod progress;
 pub mod record;
 pub mod schedule;
 pub mod seeds;
+pub mod sensitivity;
 pub mod spectrum;
 pub mod sweep;
 pub mod thresholds;

@@ -4,7 +4,8 @@
 use clap::Args;
 use serde::Serialize;
 
-use bistable_analysis::sweep::classify_point;
+use bistable_analysis::sensitivity::{Sensitivity, SensitivityOptions};
+use bistable_analysis::sweep::classify_point_with;
 use bistable_core::ClassifyOptions;
 
 use crate::common::CommonArgs;
@@ -75,6 +76,24 @@ pub struct ClassifyArgs {
     /// [default: 2000 for classify, 300 for map (throughput)].
     #[arg(long, value_name = "N")]
     pub lyapunov_periods: Option<u32>,
+
+    /// Sensitivity test: perturbed repeats of a suspect run (0..=64; 0 turns the test off).
+    #[arg(long, value_name = "K", default_value_t = SensitivityOptions::default().repeats)]
+    pub repeats: u32,
+
+    /// Sensitivity test: transient growth, in e-foldings of an infinitesimal perturbation,
+    /// from which a decided run is suspect and repeated (in (0, 700]).
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().efoldings)]
+    pub efoldings: f64,
+
+    /// Sensitivity test: displacement of the repeats' initial state (x0, x0') from (0, 0)
+    /// (in (0, 1e-3]).
+    #[arg(long, value_name = "D", default_value = "1e-12")]
+    pub perturbation: f64,
+
+    /// Sensitivity test: length of the repeats of an aperiodic run, in natural periods.
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().repeat_periods)]
+    pub repeat_periods: f64,
 }
 
 impl ClassifyArgs {
@@ -88,6 +107,17 @@ impl ClassifyArgs {
             lyapunov_periods: self.lyapunov_periods.unwrap_or(lyapunov_default),
         }
         .check()?)
+    }
+
+    /// Validated settings of the sensitivity test.
+    pub fn sensitivity(&self) -> Result<SensitivityOptions, CliError> {
+        let so = SensitivityOptions {
+            repeats: self.repeats,
+            efoldings: self.efoldings,
+            perturbation: self.perturbation,
+            repeat_periods: self.repeat_periods,
+        };
+        Ok(so.check()?)
     }
 }
 
@@ -127,13 +157,13 @@ impl Serialize for Json<'_> {
 /// The CSV form of a [`Record`] (one row of `bistable map`).
 pub trait RecordCsv: Sized {
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
-    fn fields(&self) -> [Field<'_>; 16];
+    fn fields(&self) -> [Field<'_>; 21];
     /// Parses a CSV row written with [`RecordCsv::fields`] (columns as in [`CSV_COLUMNS`]).
     fn from_csv(cells: &[&str]) -> Result<Self, String>;
 }
 
 impl RecordCsv for Record {
-    fn fields(&self) -> [Field<'_>; 16] {
+    fn fields(&self) -> [Field<'_>; 21] {
         self.values().map(|v| match v {
             Value::F(x) => Field::F(x),
             Value::I(n) => Field::I(n),
@@ -184,6 +214,11 @@ impl RecordCsv for Record {
             periods_simulated: parse(cells, 13)?,
             stopped_early: parse(cells, 14)?,
             wall_time_s: parse(cells, 15)?,
+            sensitive: parse(cells, 16)?,
+            runs: parse(cells, 17)?,
+            majority_fraction: parse(cells, 18)?,
+            outcome_fractions: cells[19].to_string(),
+            efoldings: opt(cells, 20)?,
         })
     }
 }
@@ -194,7 +229,84 @@ pub fn run(args: &ClassifyCmdArgs) -> Result<(), CliError> {
     let co = args
         .classify
         .options(ClassifyOptions::default().lyapunov_periods)?;
-    print_json(&Json(&Record::new(&classify_point(&model, co)?)))
+    let so = args.classify.sensitivity()?;
+    let point = classify_point_with(&model, co, so)?;
+    print_json(&ClassifyJson {
+        record: Json(&Record::new(&point)),
+        sensitivity: &point.sensitivity,
+        options: so,
+    })
+}
+
+/// The JSON of `classify`: the record's keys, then `outcomes` (one object per distinct
+/// outcome) and `sensitivity_test` (the criterion and its figures).
+struct ClassifyJson<'a> {
+    record: Json<'a>,
+    sensitivity: &'a Sensitivity,
+    options: SensitivityOptions,
+}
+
+impl Serialize for ClassifyJson<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let mut m = s.serialize_map(None)?;
+        for (k, v) in self.record.0.pairs() {
+            match v {
+                Value::F(x) => m.serialize_entry(k, &x)?,
+                Value::I(n) => m.serialize_entry(k, &n)?,
+                Value::Bool(b) => m.serialize_entry(k, &b)?,
+                Value::S(t) => m.serialize_entry(k, t)?,
+                Value::Null => m.serialize_entry(k, &None::<u8>)?,
+            }
+        }
+        let sens = self.sensitivity;
+        let n = f64::from(sens.runs.max(1));
+        let outcomes: Vec<OutcomeJson> = sens
+            .outcomes
+            .iter()
+            .map(|(o, c)| OutcomeJson {
+                class: o.class.name(),
+                period: o.period,
+                chaotic: o.chaotic,
+                final_well: o.final_well.map(|w| w.number()),
+                runs: *c,
+                fraction: f64::from(*c) / n,
+            })
+            .collect();
+        m.serialize_entry("outcomes", &outcomes)?;
+        m.serialize_entry(
+            "sensitivity_test",
+            &TestJson {
+                trigger: sens.trigger.name(),
+                efoldings: sens.efoldings,
+                efoldings_threshold: self.options.efoldings,
+                repeats: self.options.repeats,
+                perturbation: self.options.perturbation,
+                repeat_periods: self.options.repeat_periods,
+            },
+        )?;
+        m.end()
+    }
+}
+
+#[derive(Serialize)]
+struct OutcomeJson {
+    class: &'static str,
+    period: Option<u32>,
+    chaotic: bool,
+    final_well: Option<u8>,
+    runs: u32,
+    fraction: f64,
+}
+
+#[derive(Serialize)]
+struct TestJson {
+    trigger: &'static str,
+    efoldings: Option<f64>,
+    efoldings_threshold: f64,
+    repeats: u32,
+    perturbation: f64,
+    repeat_periods: f64,
 }
 
 #[cfg(test)]
@@ -221,6 +333,12 @@ mod tests {
             periods_simulated: 20000.5,
             stopped_early: false,
             wall_time_s: 1.5e-3,
+            sensitive: true,
+            runs: 9,
+            majority_fraction: 7.0 / 9.0,
+            outcome_fractions: "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222"
+                .into(),
+            efoldings: Some(20.0),
         };
         let mut line = String::new();
         push_fields(&mut line, &r.fields());

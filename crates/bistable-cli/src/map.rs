@@ -10,7 +10,8 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::sweep::{classify_points, interleaved};
+use bistable_analysis::sensitivity::SensitivityOptions;
+use bistable_analysis::sweep::{classify_points_with, interleaved};
 use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
 use bistable_analysis::{Model, Threads};
 use bistable_core::ClassifyOptions;
@@ -134,6 +135,12 @@ struct Summary {
     point_time_s: f64,
     /// Share of the grid's points that ran the full `--max-periods`.
     full_length_share: f64,
+    /// Points flagged sensitive (their outcome depends on rounding).
+    sensitive: usize,
+    /// Share of the grid's points flagged sensitive.
+    sensitive_share: f64,
+    /// Points repeated by the sensitivity test (suspect ones).
+    repeated: usize,
     counts: HashMap<String, usize>,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
@@ -162,6 +169,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
     }
     let model = args.model.model(omegas.start, vs.start)?;
     let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;
+    let so = args.classify.sensitivity()?;
     let threads = threads(args.threads, "--threads")?;
 
     let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
@@ -183,7 +191,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         .collect();
 
     let start = WallClock::now();
-    let (computed, failed) = compute(&todo, &model, co, threads, args.out.as_deref(), |r| {
+    let (computed, failed) = compute(&todo, &model, co, so, threads, args.out.as_deref(), |r| {
         done.insert(key(r.omega, r.velocity), r);
     })?;
     let wall = start.elapsed().as_secs_f64();
@@ -221,6 +229,13 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         } else {
             records.iter().filter(|r| !r.stopped_early).count() as f64 / records.len() as f64
         },
+        sensitive: records.iter().filter(|r| r.sensitive).count(),
+        sensitive_share: if records.is_empty() {
+            0.0
+        } else {
+            records.iter().filter(|r| r.sensitive).count() as f64 / records.len() as f64
+        },
+        repeated: records.iter().filter(|r| r.runs > 1).count(),
         counts,
         out: args.out.clone(),
         plot: args.plot.clone(),
@@ -352,6 +367,7 @@ fn compute(
     todo: &[(f64, f64)],
     model: &Model,
     co: ClassifyOptions,
+    so: SensitivityOptions,
     threads: Threads,
     out: Option<&Path>,
     mut sink: impl FnMut(Record),
@@ -370,7 +386,7 @@ fn compute(
         todo.len() as f64,
         format!("classifying {} points", todo.len()),
     );
-    classify_points(model, todo, co, threads, |i, r| {
+    classify_points_with(model, todo, co, so, threads, |i, r| {
         match r {
             Ok(point) => {
                 let rec = Record::new(&point);
@@ -400,7 +416,8 @@ fn human(s: &Summary) -> String {
         "map Ω {} × V {} (ζ = {}, e = {}): {} points, {} computed, {} resumed from the file, \
          {} failed\n\
          wall time {:.1} s on {} threads: {:.1} points/s; {:.1}% of the points ran the full \
-         length\n",
+         length\n\
+         sensitive (the outcome depends on rounding): {} points ({:.2}%); {} points repeated\n",
         s.omega_range,
         s.velocity_range,
         s.zeta,
@@ -412,7 +429,10 @@ fn human(s: &Summary) -> String {
         s.wall_time_s,
         s.threads,
         s.points_per_second,
-        100.0 * s.full_length_share
+        100.0 * s.full_length_share,
+        s.sensitive,
+        100.0 * s.sensitive_share,
+        s.repeated
     );
     for (label, n) in counts {
         text.push_str(&format!("  {n:>7}  {label}\n"));
@@ -604,6 +624,18 @@ fn draw_map(
         ));
     }
     chart.draw_series(rects)?;
+    // Sensitive points: a hatch stroke across the cell.
+    let sensitive: Vec<(f64, f64)> = records
+        .iter()
+        .filter(|r| r.sensitive)
+        .map(|r| (r.omega, r.velocity))
+        .collect();
+    chart.draw_series(sensitive.iter().map(|&(om, v)| {
+        PathElement::new(
+            vec![(om - hw, v - hv), (om + hw, v + hv)],
+            SENSITIVE.stroke_width(2),
+        )
+    }))?;
     // Thresholds, clipped to the chart.
     let to_px = |p: (f64, f64)| chart.backend_coord(&p);
     let (x0, x1) = wx;
@@ -640,12 +672,25 @@ fn draw_map(
         ))?;
         root.draw(&Text::new(text, (x, py - 13), style))?;
     }
-    legend_panel(&right, &present, records.len() + failed.len())
+    legend_panel(
+        &right,
+        &present,
+        records.len() + failed.len(),
+        sensitive.len(),
+    )
 }
+
+/// The hatch of sensitive points.
+const SENSITIVE: RGBColor = RGBColor(255, 20, 147);
 
 /// The colour key: a table of hue (snap-throughs) × shade (period), then the other categories
 /// with their counts.
-fn legend_panel(area: &Area<'_>, present: &HashMap<Category, usize>, n: usize) -> DrawResult {
+fn legend_panel(
+    area: &Area<'_>,
+    present: &HashMap<Category, usize>,
+    n: usize,
+    sensitive: usize,
+) -> DrawResult {
     let text = |size| (FONT, size).into_font().color(&BLACK);
     let y0 = 40;
     area.draw(&Text::new("Colour key", (12, y0), plot::left(text(20))))?;
@@ -723,5 +768,27 @@ fn legend_panel(area: &Area<'_>, present: &HashMap<Category, usize>, n: usize) -
         ))?;
         y += 50;
     }
+    // Sensitive points: the same hatch on a neutral cell.
+    area.draw(&Rectangle::new(
+        [(14, y - 11), (36, y + 11)],
+        RGBColor(200, 200, 200).filled(),
+    ))?;
+    area.draw(&PathElement::new(
+        vec![(14, y + 11), (36, y - 11)],
+        SENSITIVE.stroke_width(2),
+    ))?;
+    area.draw(&Text::new(
+        "sensitive: outcome decided by rounding",
+        (46, y - 1),
+        plot::left(text(15)),
+    ))?;
+    area.draw(&Text::new(
+        format!(
+            "{sensitive} points ({:.1}%), colour of the most frequent",
+            100.0 * sensitive as f64 / n.max(1) as f64
+        ),
+        (46, y + 17),
+        plot::left(text(13).color(&RGBColor(90, 90, 90))),
+    ))?;
     Ok(())
 }

@@ -570,6 +570,25 @@ impl Simulator {
         }
     }
 
+    /// Like [`Simulator::enable_variational`], but without restarting the step when no step has
+    /// been taken from the current instant yet (a fresh simulator), so that the trajectory is
+    /// exactly the one without variational equations.
+    pub fn start_variational(&mut self) {
+        if !self.live && self.now == self.t0 {
+            self.var = Some(Variational {
+                phi: [[1.0, 0.0], [0.0, 1.0]],
+                cols: [[0.0; BUF]; 2],
+            });
+        } else {
+            self.enable_variational();
+        }
+    }
+
+    /// Stops integrating the variational equations (the trajectory is not affected).
+    pub fn disable_variational(&mut self) {
+        self.var = None;
+    }
+
     /// `Φ(now)`, row-major over `(x, x')`, if enabled.
     pub fn variational(&self) -> Option<[[f64; 2]; 2]> {
         let v = self.var.as_ref()?;
