@@ -24,6 +24,7 @@
 #![warn(missing_docs)]
 
 pub mod arclength;
+pub mod basins;
 pub mod bifurcation;
 pub mod branches;
 pub mod continuation;

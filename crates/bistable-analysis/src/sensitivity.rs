@@ -33,8 +33,11 @@ pub struct SensitivityOptions {
     /// Displacement of the repeats' initial state `(x0, x0')` from `(0, 0)`.
     pub perturbation: f64,
     /// Length of the repeats of an aperiodic run, in natural periods (a repeat still aperiodic
-    /// then is counted as aperiodic, chaotic or not by its own Lyapunov exponent).
+    /// then is counted as aperiodic, chaotic or not by its own Lyapunov exponent); also the
+    /// stretch over which the growth is tracked, and a run decided later is repeated too.
     pub repeat_periods: f64,
+    /// Further Lyapunov windows of an aperiodic run, each a verdict on `chaotic`.
+    pub windows: u32,
 }
 
 /// Default transient growth (e-foldings) from which a decided run is repeated; chosen on the
@@ -48,6 +51,7 @@ impl Default for SensitivityOptions {
             efoldings: DEFAULT_EFOLDINGS,
             perturbation: 1e-12,
             repeat_periods: 1000.0,
+            windows: 8,
         }
     }
 }
@@ -62,7 +66,8 @@ impl SensitivityOptions {
     }
 
     /// Checks the settings in the order of the fields: `repeats` (`<= 64`), `efoldings`
-    /// (`(0, 700]`), `perturbation` (`(0, 1e-3]`), `repeat_periods` (`[1, 1e8]`).
+    /// (`(0, 700]`), `perturbation` (`(0, 1e-3]`), `repeat_periods` (`[1, 1e8]`), `windows`
+    /// (`<= 1024`).
     pub fn check(&self) -> Result<Self, ParamError> {
         let r = self.repeats;
         check("repeats", f64::from(r), r <= 64, "must be in [0, 64]")?;
@@ -82,6 +87,8 @@ impl SensitivityOptions {
             (1.0..=1e8).contains(&p),
             "must be in [1, 1e8]",
         )?;
+        let w = self.windows;
+        check("windows", f64::from(w), w <= 1024, "must be in [0, 1024]")?;
         Ok(*self)
     }
 }
@@ -142,6 +149,9 @@ pub enum Trigger {
     Growth,
     /// Still aperiodic at the end of the run.
     Aperiodic,
+    /// Decided after more than [`SensitivityOptions::repeat_periods`] natural periods (the
+    /// growth is tracked over that stretch only).
+    Late,
 }
 
 impl Trigger {
@@ -151,6 +161,7 @@ impl Trigger {
             Trigger::None => "none",
             Trigger::Growth => "growth",
             Trigger::Aperiodic => "aperiodic",
+            Trigger::Late => "late",
         }
     }
 }
@@ -236,26 +247,41 @@ pub fn classify_sensitive(
     co: ClassifyOptions,
     so: SensitivityOptions,
 ) -> Result<(Classification, Sensitivity), SimError> {
-    let run = |co: ClassifyOptions, opts: SolverOptions, start: (f64, f64), cap: Option<f64>| {
+    // The growth is tracked over the first `repeat_periods` natural periods; a run decided
+    // later than that is suspect by its length alone.
+    let horizon_sections =
+        (so.repeat_periods * std::f64::consts::TAU / model.shaker_period()).ceil() as u64;
+    let run = |co: ClassifyOptions,
+               opts: SolverOptions,
+               start: (f64, f64),
+               cap: Option<f64>,
+               no_lyapunov: bool| {
         let track = Tracking {
             efoldings_cap: cap,
-            extra_windows: if cap.is_some() { so.repeats } else { 0 },
+            track_periods: horizon_sections,
+            extra_windows: if cap.is_some() { so.windows } else { 0 },
+            no_lyapunov,
         };
         classify_from(model.params, model.shaker, opts, co, start, track)
     };
     let cap = (so.repeats > 0).then_some(so.efoldings);
-    let base = run(co, model.opts, (0.0, 0.0), cap)?;
+    let base = run(co, model.opts, (0.0, 0.0), cap, false)?;
     let trigger = if so.repeats == 0 {
         Trigger::None
     } else if base.period.is_none() && !base.stopped_early {
         Trigger::Aperiodic
     } else if base.transient_efoldings.is_some_and(|g| g >= so.efoldings) {
         Trigger::Growth
+    } else if base.periods_simulated > so.repeat_periods {
+        Trigger::Late
     } else {
         Trigger::None
     };
     let mut runs = vec![base];
     if trigger != Trigger::None {
+        // Repeats of an aperiodic run stop at `repeat_periods` (still aperiodic then: counted
+        // as aperiodic, chaotic or not by their own Lyapunov exponent); those of a decided run
+        // run as long as it may.
         let co_r = if trigger == Trigger::Aperiodic {
             ClassifyOptions {
                 max_natural_periods: so.repeat_periods.min(co.max_natural_periods),
@@ -266,7 +292,15 @@ pub fn classify_sensitive(
         };
         for j in 1..=so.repeats {
             let (start, opts) = repeat_setup(j, so.repeats, so.perturbation, model.opts)?;
-            runs.push(run(co_r, opts, start, None)?);
+            // A repeat of an aperiodic run only asks whether another attractor is reached; the
+            // chaos verdict is tested on the base run's further Lyapunov windows.
+            let aperiodic = trigger == Trigger::Aperiodic;
+            let mut r = run(co_r, opts, start, None, aperiodic)?;
+            if aperiodic && r.period.is_none() {
+                r.chaotic = base.chaotic;
+                r.lyapunov = base.lyapunov;
+            }
+            runs.push(r);
         }
     }
     // Each run's outcome, then the base run's chaos verdicts on its further Lyapunov windows

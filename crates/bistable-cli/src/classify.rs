@@ -94,6 +94,11 @@ pub struct ClassifyArgs {
     /// Sensitivity test: length of the repeats of an aperiodic run, in natural periods.
     #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().repeat_periods)]
     pub repeat_periods: f64,
+
+    /// Sensitivity test: further Lyapunov windows of an aperiodic run, each a verdict on
+    /// 'chaotic' (0..=1024).
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().windows)]
+    pub lyapunov_windows: u32,
 }
 
 impl ClassifyArgs {
@@ -116,6 +121,7 @@ impl ClassifyArgs {
             efoldings: self.efoldings,
             perturbation: self.perturbation,
             repeat_periods: self.repeat_periods,
+            windows: self.lyapunov_windows,
         };
         Ok(so.check()?)
     }
@@ -283,6 +289,7 @@ impl Serialize for ClassifyJson<'_> {
                 repeats: self.options.repeats,
                 perturbation: self.options.perturbation,
                 repeat_periods: self.options.repeat_periods,
+                lyapunov_windows: self.options.windows,
             },
         )?;
         m.end()
@@ -307,6 +314,7 @@ struct TestJson {
     repeats: u32,
     perturbation: f64,
     repeat_periods: f64,
+    lyapunov_windows: u32,
 }
 
 #[cfg(test)]

@@ -148,6 +148,7 @@ impl From<ParamError> for CliError {
             "efoldings" => "--efoldings",
             "perturbation" => "--perturbation",
             "repeat_periods" => "--repeat-periods",
+            "windows" => "--lyapunov-windows",
             other => return CliError::invalid(other, e.value, e.rule),
         };
         CliError::invalid(option, e.value, e.rule)

@@ -258,10 +258,10 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
 /// `FILE.csv.lock` holding this process's id while it appends to `FILE.csv`, so that two runs
 /// cannot interleave their rows. A lock left by a process that no longer runs (killed) is
 /// taken over.
-struct OutLock(PathBuf);
+pub(crate) struct OutLock(PathBuf);
 
 impl OutLock {
-    fn take(out: &Path) -> Result<Self, CliError> {
+    pub(crate) fn take(out: &Path) -> Result<Self, CliError> {
         let path = PathBuf::from(format!("{}.lock", out.display()));
         if let Ok(text) = std::fs::read_to_string(&path) {
             let pid = text.trim();

@@ -130,11 +130,17 @@ pub struct Classification {
     /// perturbation over any stretch of the run before its class was decided (from the
     /// variational equations, renormalised once per shaker period; sticking forgets the past and
     /// starts a new stretch). Tracking stops once the growth reaches the cap given to
-    /// [`classify_from`], so values at the cap mean "at least". `None` when not tracked.
+    /// [`classify_from`], so values at the cap mean "at least", or after the number of periods
+    /// given there. `None` when not tracked.
     pub transient_efoldings: Option<f64>,
     /// For an aperiodic response with extra Lyapunov windows asked of [`classify_from`]: how
     /// many of them found `λ > 1e-3` (chaotic), and how many there were. `None` otherwise.
     pub chaos_votes: Option<(u32, u32)>,
+    /// For a periodic response: the stroboscopic section point `(x, x')` (plate phase 0) of the
+    /// steady-state cycle with the smallest `x`, a label of the orbit that does not depend on
+    /// where along the cycle the run stopped (two coexisting orbits of the same period differ
+    /// here). `None` when aperiodic.
+    pub cycle_anchor: Option<[f64; 2]>,
 }
 
 /// Per-section record.
@@ -162,9 +168,15 @@ pub struct Tracking {
     /// Track the transient growth until it reaches this many e-foldings
     /// ([`Classification::transient_efoldings`]).
     pub efoldings_cap: Option<f64>,
+    /// ... and for at most this many shaker periods (`0`: no limit); the growth then is that
+    /// of this first stretch of the run.
+    pub track_periods: u64,
     /// For an aperiodic response, this many further Lyapunov windows of `lyapunov_periods`
     /// after the one that decides `chaotic` ([`Classification::chaos_votes`]).
     pub extra_windows: u32,
+    /// Skip the Lyapunov exponent of an aperiodic response (`lyapunov` is then `None` and
+    /// `chaotic` false): for runs that only ask whether a period is reached.
+    pub no_lyapunov: bool,
 }
 
 /// Classifies the response from the state `(x0, x0')` at `τ = 0` (the plate's phase and mean
@@ -211,6 +223,10 @@ pub fn classify_from(
         }
         if let Some(g) = growth.as_mut() {
             g.section(&mut sim);
+            if track.track_periods > 0 && k >= track.track_periods && g.live {
+                g.live = false;
+                sim.disable_variational();
+            }
         }
         let rest = at_rest_in_well_two(&sim, plate);
         let found = if rest {
@@ -256,15 +272,23 @@ pub fn classify_from(
         per_window(|s| s.impacts)
     };
     let sticking = !at_rest && per_window(|s| s.sticks).is_some_and(|n| n > 0);
+    let cycle_anchor = period.map(|p| {
+        hist.iter()
+            .rev()
+            .take(p as usize)
+            .map(|s| s.y)
+            .fold([f64::INFINITY, 0.0], |a, y| if y[0] < a[0] { y } else { a })
+    });
     let transient_efoldings = growth.as_ref().map(|g| g.max.min(g.cap));
     if growth.is_some() {
         sim.disable_variational();
     }
     let lyapunov = match period {
         Some(_) => None,
+        None if track.no_lyapunov => None,
         None => lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?,
     };
-    let chaos_votes = if period.is_none() && track.extra_windows > 0 {
+    let chaos_votes = if period.is_none() && track.extra_windows > 0 && !track.no_lyapunov {
         let mut chaotic = 0;
         for _ in 0..track.extra_windows {
             let l = lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?;
@@ -288,6 +312,7 @@ pub fn classify_from(
         stopped_early: k < max_sections,
         transient_efoldings,
         chaos_votes,
+        cycle_anchor,
     })
 }
 
