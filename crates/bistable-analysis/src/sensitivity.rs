@@ -272,7 +272,7 @@ pub fn classify_sensitive(
         Trigger::Aperiodic
     } else if base.transient_efoldings.is_some_and(|g| g >= so.efoldings) {
         Trigger::Growth
-    } else if base.periods_simulated > so.repeat_periods {
+    } else if !co.full_length && base.periods_simulated > so.repeat_periods {
         Trigger::Late
     } else {
         Trigger::None

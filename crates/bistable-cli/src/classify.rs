@@ -33,11 +33,30 @@ Lyapunov exponent (per unit of τ, from the variational equations with saltation
 matrices at impacts) over the next --lyapunov-periods shaker periods tells
 whether it is chaotic (> 1e-3).
 
+Sensitivity: in a chaotic transient, rounding errors of 1e-16 grow like e^(λτ)
+and reach order one after a few hundred time units; which attractor such a run
+ends on is then decided by rounding, and no double-precision run can decide it
+(another tolerance, order or start 1e-12 away ends elsewhere). A run is repeated
+when an infinitesimal perturbation grew by at least --efoldings e-foldings
+before its class was decided (variational equations, over the first
+--repeat-periods natural periods), when it was decided later than that, or when
+it is still aperiodic at the end: --repeats runs (tol x10, x100, and starts
+displaced by --perturbation), and for an aperiodic run --lyapunov-windows
+further Lyapunov windows of its own, each a verdict on 'chaotic'. The point is
+'sensitive' when these do not all agree (class, period, chaos, final well); the
+reported result is the most frequent outcome. Points decided early stay a single
+run; a chaotic attractor that every run reaches and keeps is 'chaotic', not
+sensitive. See docs/sensitivity.md.
+
 Always prints one JSON object (--json is accepted and changes nothing):
   class, period, chaotic, lyapunov, snap_throughs, final_well (1 | 2),
   at_rest_in_second_well, impacts_per_period, sticking, periods_simulated
-  (natural periods τ/2π), stopped_early, wall_time_s, and the inputs omega,
-  velocity, zeta, restitution.";
+  (natural periods τ/2π), stopped_early, wall_time_s, the inputs omega,
+  velocity, zeta, restitution; sensitive, runs (verdicts counted),
+  majority_fraction, outcome_fractions (class:period:well=fraction;...),
+  efoldings (transient growth, capped at the threshold); outcomes (one object
+  per distinct outcome: class, period, chaotic, final_well, runs, fraction) and
+  sensitivity_test (trigger none | growth | late | aperiodic, and the settings).";
 
 /// Shown after the options by `bistable classify --help`.
 pub const AFTER_HELP: &str = "\
@@ -46,7 +65,9 @@ Exit codes: 0 success; 2 invalid options; 1 the simulation failed.
 Examples:
   bistable classify --omega 0.85 --velocity 0.11     # intrawell, period 4
   bistable classify --omega 0.85 --velocity 0.15     # at rest in well 2
-  bistable classify --omega 2.45 --velocity 0.07     # chaotic
+  bistable classify --omega 2.45 --velocity 0.07     # chaotic (not sensitive)
+  bistable classify --omega 0.85 --velocity 0.13     # sensitive: rest in well 2
+                                                     # or continuous interwell P-1
   bistable classify --omega 0.85 --velocity 0.11 --full --max-periods 5000";
 
 /// How long and how carefully to classify (shared by `classify` and `map`).

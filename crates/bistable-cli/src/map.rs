@@ -37,7 +37,8 @@ Each point starts from the paper's initial condition and runs until its class is
 decided, at most --max-periods natural periods (20,000). To keep a large map
 fast, the largest Lyapunov exponent of an aperiodic point (which decides
 'chaotic') is averaged over 300 shaker periods instead of classify's 2000; set
---lyapunov-periods to change it.
+--lyapunov-periods to change it. Every point gets classify's sensitivity test
+(--repeats 0 turns it off).
 
 Resuming: rows are appended and flushed as points complete (in an interleaved
 order that covers the whole grid early), so an interrupted run loses only the
@@ -53,15 +54,18 @@ pub const AFTER_HELP: &str = "\
 CSV (--out): header and one row per point, in completion order:
   omega,velocity,zeta,restitution,class,period,chaotic,lyapunov,snap_throughs,
   final_well,at_rest_in_second_well,impacts_per_period,sticking,
-  periods_simulated,stopped_early,wall_time_s
-  (the keys of 'bistable classify'; empty period, lyapunov, impacts_per_period
-  mean null).
+  periods_simulated,stopped_early,wall_time_s,sensitive,runs,majority_fraction,
+  outcome_fractions,efoldings
+  (the keys of 'bistable classify' but outcomes and sensitivity_test; empty
+  period, lyapunov, impacts_per_period, efoldings mean null).
 
 PNG (--plot): the paper's colour logic. Hue by the number of snap-throughs over
 the whole run: blue none, green one, orange several; shade by steady-state
 period, dark P-1 to light P-6+ (periods 7..16). Black: chaotic (aperiodic, λ >
 1e-3); grey: aperiodic but not chaotic; purple: converged to rest at the second
-equilibrium x = 1. Lines: the thresholds of Eq. 16–18, single impact
+equilibrium x = 1. Pink hatch: sensitive points (the outcome depends on
+rounding, see 'bistable classify --help'), coloured by their most frequent
+outcome; their share is in the legend and the summary. Lines: the thresholds of Eq. 16–18, single impact
 V = 1/(4(1+e)), interwell V = (1−e)/(2(1+e)), quasi-static V = Ω/2.
 
 Prints a summary (points, wall time, points per second, share of points that

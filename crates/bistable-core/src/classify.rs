@@ -351,12 +351,11 @@ impl Growth {
                 self.max = self.max.max(self.acc - self.low);
             }
             None => {
-                // Stuck (Φ = 0): the past is forgotten; a new stretch starts once free.
+                // Stuck (Φ = 0): the past is forgotten; a new stretch starts with the next
+                // free flight.
                 self.acc = 0.0;
                 self.low = 0.0;
-                if sim.state().mode == crate::ContactMode::Free {
-                    sim.enable_variational();
-                }
+                sim.reseed_variational();
             }
         }
         if self.max >= self.cap {

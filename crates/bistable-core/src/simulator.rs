@@ -268,6 +268,8 @@ pub struct Simulator {
 struct Variational {
     phi: [[f64; 2]; 2],
     cols: [[f64; BUF]; 2],
+    /// Set `phi = I` at the start of the next step (see `Simulator::reseed_variational`).
+    reseed: bool,
 }
 
 /// Flights shorter than this count towards the Zeno guard (time units).
@@ -563,6 +565,7 @@ impl Simulator {
         self.var = Some(Variational {
             phi: [[1.0, 0.0], [0.0, 1.0]],
             cols: [[0.0; BUF]; 2],
+            reseed: false,
         });
         self.restart_at_now(&st, st.z, st.zdot);
         if let Some(v) = self.var.as_mut() {
@@ -578,9 +581,19 @@ impl Simulator {
             self.var = Some(Variational {
                 phi: [[1.0, 0.0], [0.0, 1.0]],
                 cols: [[0.0; BUF]; 2],
+                reseed: false,
             });
         } else {
             self.enable_variational();
+        }
+    }
+
+    /// Restarts the variational solution from `Φ = I` at the start of the next free-flight
+    /// step, without restarting the integration (the trajectory is not affected): for a
+    /// variation that sticking has set to zero.
+    pub fn reseed_variational(&mut self) {
+        if let Some(v) = self.var.as_mut() {
+            v.reseed = true;
         }
     }
 
@@ -752,6 +765,10 @@ impl Simulator {
                     return Ok(());
                 }
                 if let Some(v) = self.var.as_mut() {
+                    if v.reseed {
+                        v.phi = [[1.0, 0.0], [0.0, 1.0]];
+                        v.reseed = false;
+                    }
                     let [dx, dv] = v.phi;
                     v.cols = [
                         taylor::variation(zeta, s, p, dx[0], dv[0]),
