@@ -5,7 +5,7 @@
 use crate::sweep::Classified;
 
 /// Names of the [`Record`] fields, in order: the JSON keys and the map CSV columns.
-pub const COLUMNS: [&str; 21] = [
+pub const COLUMNS: [&str; 23] = [
     "omega",
     "velocity",
     "zeta",
@@ -25,8 +25,10 @@ pub const COLUMNS: [&str; 21] = [
     "sensitive",
     "runs",
     "majority_fraction",
-    "outcome_fractions",
+    "outcomes",
+    "sensitivity_trigger",
     "efoldings",
+    "efoldings_threshold",
 ];
 
 /// One value of a [`Record`].
@@ -87,11 +89,18 @@ pub struct Record {
     pub runs: u32,
     /// Share of the runs that reached the reported outcome.
     pub majority_fraction: f64,
-    /// Every outcome with its share, `class:period:well=fraction` joined by `;`.
-    pub outcome_fractions: String,
+    /// Every distinct outcome with its share, most frequent first: `class:period:well=share`
+    /// joined by `;` (period `P-n`, `chaotic` or `aperiodic`; well `-` for continuous
+    /// interwell), e.g. `transient_interwell:P-1:2=0.556;continuous_interwell:P-1:-=0.444`.
+    pub outcomes: String,
+    /// Why the point was repeated: `none`, `growth`, `late` or `aperiodic`
+    /// ([`crate::sensitivity::Trigger`]).
+    pub sensitivity_trigger: String,
     /// Transient growth of the run from the paper's initial condition (e-foldings, capped at
     /// the threshold); `None` without the test.
     pub efoldings: Option<f64>,
+    /// The growth from which a decided run is repeated; `None` without the test.
+    pub efoldings_threshold: Option<f64>,
 }
 
 /// The three class names a [`Record`] may hold.
@@ -121,13 +130,15 @@ impl Record {
             sensitive: point.sensitivity.sensitive,
             runs: point.sensitivity.runs,
             majority_fraction: point.sensitivity.majority_fraction(),
-            outcome_fractions: point.sensitivity.fractions(),
+            outcomes: point.sensitivity.fractions(),
+            sensitivity_trigger: point.sensitivity.trigger.name().to_string(),
             efoldings: point.sensitivity.efoldings,
+            efoldings_threshold: point.sensitivity.threshold,
         }
     }
 
     /// The values in the order of [`COLUMNS`].
-    pub fn values(&self) -> [Value<'_>; 21] {
+    pub fn values(&self) -> [Value<'_>; 23] {
         let opt_i = |v: Option<u64>| v.map_or(Value::Null, Value::I);
         [
             Value::F(self.omega),
@@ -149,8 +160,10 @@ impl Record {
             Value::Bool(self.sensitive),
             Value::I(u64::from(self.runs)),
             Value::F(self.majority_fraction),
-            Value::S(&self.outcome_fractions),
+            Value::S(&self.outcomes),
+            Value::S(&self.sensitivity_trigger),
             self.efoldings.map_or(Value::Null, Value::F),
+            self.efoldings_threshold.map_or(Value::Null, Value::F),
         ]
     }
 

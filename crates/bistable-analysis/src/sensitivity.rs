@@ -182,6 +182,8 @@ pub struct Sensitivity {
     /// Transient growth of the run from the paper's initial condition (capped at the
     /// threshold; `None` without the test).
     pub efoldings: Option<f64>,
+    /// The threshold ([`SensitivityOptions::efoldings`]; `None` without the test).
+    pub threshold: Option<f64>,
 }
 
 impl Sensitivity {
@@ -344,6 +346,7 @@ pub fn classify_sensitive(
         outcomes: outcomes.iter().map(|e| (e.0, e.1)).collect(),
         runs: total,
         efoldings: base.transient_efoldings,
+        threshold: cap,
     };
     Ok((reported, sensitivity))
 }

@@ -4,7 +4,7 @@
 use clap::Args;
 use serde::Serialize;
 
-use bistable_analysis::sensitivity::{Sensitivity, SensitivityOptions};
+use bistable_analysis::sensitivity::SensitivityOptions;
 use bistable_analysis::sweep::classify_point_with;
 use bistable_core::ClassifyOptions;
 
@@ -53,10 +53,11 @@ Always prints one JSON object (--json is accepted and changes nothing):
   at_rest_in_second_well, impacts_per_period, sticking, periods_simulated
   (natural periods τ/2π), stopped_early, wall_time_s, the inputs omega,
   velocity, zeta, restitution; sensitive, runs (verdicts counted),
-  majority_fraction, outcome_fractions (class:period:well=fraction;...),
-  efoldings (transient growth, capped at the threshold); outcomes (one object
-  per distinct outcome: class, period, chaotic, final_well, runs, fraction) and
-  sensitivity_test (trigger none | growth | late | aperiodic, and the settings).";
+  majority_fraction, outcomes (every distinct outcome with its share, most
+  frequent first: class:period:well=share joined by ';', period P-n, chaotic or
+  aperiodic, well - for continuous interwell), sensitivity_trigger (none |
+  growth | late | aperiodic), efoldings (transient growth, capped at the
+  threshold) and efoldings_threshold. The same keys as the map CSV columns.";
 
 /// Shown after the options by `bistable classify --help`.
 pub const AFTER_HELP: &str = "\
@@ -184,13 +185,13 @@ impl Serialize for Json<'_> {
 /// The CSV form of a [`Record`] (one row of `bistable map`).
 pub trait RecordCsv: Sized {
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
-    fn fields(&self) -> [Field<'_>; 21];
+    fn fields(&self) -> [Field<'_>; 23];
     /// Parses a CSV row written with [`RecordCsv::fields`] (columns as in [`CSV_COLUMNS`]).
     fn from_csv(cells: &[&str]) -> Result<Self, String>;
 }
 
 impl RecordCsv for Record {
-    fn fields(&self) -> [Field<'_>; 21] {
+    fn fields(&self) -> [Field<'_>; 23] {
         self.values().map(|v| match v {
             Value::F(x) => Field::F(x),
             Value::I(n) => Field::I(n),
@@ -244,8 +245,10 @@ impl RecordCsv for Record {
             sensitive: parse(cells, 16)?,
             runs: parse(cells, 17)?,
             majority_fraction: parse(cells, 18)?,
-            outcome_fractions: cells[19].to_string(),
-            efoldings: opt(cells, 20)?,
+            outcomes: cells[19].to_string(),
+            sensitivity_trigger: cells[20].to_string(),
+            efoldings: opt(cells, 21)?,
+            efoldings_threshold: opt(cells, 22)?,
         })
     }
 }
@@ -257,85 +260,7 @@ pub fn run(args: &ClassifyCmdArgs) -> Result<(), CliError> {
         .classify
         .options(ClassifyOptions::default().lyapunov_periods)?;
     let so = args.classify.sensitivity()?;
-    let point = classify_point_with(&model, co, so)?;
-    print_json(&ClassifyJson {
-        record: Json(&Record::new(&point)),
-        sensitivity: &point.sensitivity,
-        options: so,
-    })
-}
-
-/// The JSON of `classify`: the record's keys, then `outcomes` (one object per distinct
-/// outcome) and `sensitivity_test` (the criterion and its figures).
-struct ClassifyJson<'a> {
-    record: Json<'a>,
-    sensitivity: &'a Sensitivity,
-    options: SensitivityOptions,
-}
-
-impl Serialize for ClassifyJson<'_> {
-    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        use serde::ser::SerializeMap;
-        let mut m = s.serialize_map(None)?;
-        for (k, v) in self.record.0.pairs() {
-            match v {
-                Value::F(x) => m.serialize_entry(k, &x)?,
-                Value::I(n) => m.serialize_entry(k, &n)?,
-                Value::Bool(b) => m.serialize_entry(k, &b)?,
-                Value::S(t) => m.serialize_entry(k, t)?,
-                Value::Null => m.serialize_entry(k, &None::<u8>)?,
-            }
-        }
-        let sens = self.sensitivity;
-        let n = f64::from(sens.runs.max(1));
-        let outcomes: Vec<OutcomeJson> = sens
-            .outcomes
-            .iter()
-            .map(|(o, c)| OutcomeJson {
-                class: o.class.name(),
-                period: o.period,
-                chaotic: o.chaotic,
-                final_well: o.final_well.map(|w| w.number()),
-                runs: *c,
-                fraction: f64::from(*c) / n,
-            })
-            .collect();
-        m.serialize_entry("outcomes", &outcomes)?;
-        m.serialize_entry(
-            "sensitivity_test",
-            &TestJson {
-                trigger: sens.trigger.name(),
-                efoldings: sens.efoldings,
-                efoldings_threshold: self.options.efoldings,
-                repeats: self.options.repeats,
-                perturbation: self.options.perturbation,
-                repeat_periods: self.options.repeat_periods,
-                lyapunov_windows: self.options.windows,
-            },
-        )?;
-        m.end()
-    }
-}
-
-#[derive(Serialize)]
-struct OutcomeJson {
-    class: &'static str,
-    period: Option<u32>,
-    chaotic: bool,
-    final_well: Option<u8>,
-    runs: u32,
-    fraction: f64,
-}
-
-#[derive(Serialize)]
-struct TestJson {
-    trigger: &'static str,
-    efoldings: Option<f64>,
-    efoldings_threshold: f64,
-    repeats: u32,
-    perturbation: f64,
-    repeat_periods: f64,
-    lyapunov_windows: u32,
+    print_json(&Json(&Record::new(&classify_point_with(&model, co, so)?)))
 }
 
 #[cfg(test)]
@@ -365,9 +290,10 @@ mod tests {
             sensitive: true,
             runs: 9,
             majority_fraction: 7.0 / 9.0,
-            outcome_fractions: "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222"
-                .into(),
+            outcomes: "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222".into(),
+            sensitivity_trigger: "growth".into(),
             efoldings: Some(20.0),
+            efoldings_threshold: Some(20.0),
         };
         let mut line = String::new();
         push_fields(&mut line, &r.fields());

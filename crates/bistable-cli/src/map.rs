@@ -55,9 +55,9 @@ CSV (--out): header and one row per point, in completion order:
   omega,velocity,zeta,restitution,class,period,chaotic,lyapunov,snap_throughs,
   final_well,at_rest_in_second_well,impacts_per_period,sticking,
   periods_simulated,stopped_early,wall_time_s,sensitive,runs,majority_fraction,
-  outcome_fractions,efoldings
-  (the keys of 'bistable classify' but outcomes and sensitivity_test; empty
-  period, lyapunov, impacts_per_period, efoldings mean null).
+  outcomes,sensitivity_trigger,efoldings,efoldings_threshold
+  (the keys of 'bistable classify'; empty period, lyapunov,
+  impacts_per_period, efoldings, efoldings_threshold mean null).
 
 PNG (--plot): the paper's colour logic. Hue by the number of snap-throughs over
 the whole run: blue none, green one, orange several; shade by steady-state

@@ -30,6 +30,8 @@ const MAX_TRACE_ROWS: f64 = 1e8;
 const CHUNK: f64 = 1000.0;
 
 /// `invalid value '<repr>' for '<name>': <rule>`, the CLI's message with the Python argument.
+mod basins;
+
 fn invalid(py: Python<'_>, name: &str, value: f64, rule: &str) -> PyErr {
     let shown = PyFloat::new(py, value)
         .repr()
@@ -711,6 +713,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify, m)?)?;
     m.add_function(wrap_pyfunction!(classify_many, m)?)?;
     m.add_function(wrap_pyfunction!(thresholds_of, m)?)?;
+    m.add_function(wrap_pyfunction!(basins::basin_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(basins::basin_attractors, m)?)?;
     m.add_class::<PySimulator>()?;
     // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;
