@@ -29,9 +29,9 @@ const MAX_TRACE_ROWS: f64 = 1e8;
 /// in between (about a millisecond of work for the paper's cases).
 const CHUNK: f64 = 1000.0;
 
-/// `invalid value '<repr>' for '<name>': <rule>`, the CLI's message with the Python argument.
 mod basins;
 
+/// `invalid value '<repr>' for '<name>': <rule>`, the CLI's message with the Python argument.
 fn invalid(py: Python<'_>, name: &str, value: f64, rule: &str) -> PyErr {
     let shown = PyFloat::new(py, value)
         .repr()
