@@ -282,17 +282,15 @@ pub fn classify_sensitive(
     let mut runs = vec![base];
     if trigger != Trigger::None {
         // Repeats of an aperiodic run stop at `repeat_periods` (still aperiodic then: counted
-        // as the base run's outcome); those of a decided run after twice the base run's length,
-        // at least `repeat_periods` (still undecided then: aperiodic, chaotic or not by their
-        // own Lyapunov exponent).
-        let length = if trigger == Trigger::Aperiodic {
-            so.repeat_periods
+        // as aperiodic, chaotic or not by their own Lyapunov exponent); those of a decided run
+        // run as long as it may.
+        let co_r = if trigger == Trigger::Aperiodic {
+            ClassifyOptions {
+                max_natural_periods: so.repeat_periods.min(co.max_natural_periods),
+                ..co
+            }
         } else {
-            so.repeat_periods.max(2.0 * base.periods_simulated)
-        };
-        let co_r = ClassifyOptions {
-            max_natural_periods: length.min(co.max_natural_periods),
-            ..co
+            co
         };
         for j in 1..=so.repeats {
             let (start, opts) = repeat_setup(j, so.repeats, so.perturbation, model.opts)?;
