@@ -102,7 +102,9 @@ record() { # BIN DIR
          }' "$f" >"$f.tmp" && mv "$f.tmp" "$f"
   done
   for f in "$2"/map/map.csv "$2"/map/map2.csv; do
-    [ -f "$f" ] && sed -i -E 's/,[^,]*$/,T/' "$f"
+    # Mask the column named wall_time_s (wherever it is) in every row but the header.
+    [ -f "$f" ] && awk -F, -v OFS=, 'NR == 1 { for (i = 1; i <= NF; i++) if ($i == "wall_time_s") c = i; print; next }
+      c { $c = "T" } { print }' "$f" >"$f.tmp" && mv "$f.tmp" "$f"
   done
   if [ -f "$2/map/map2.csv" ]; then
     (head -n1 "$2/map/map2.csv" && tail -n +2 "$2/map/map2.csv" | sort) >"$2/map/map2.sorted"

@@ -24,6 +24,7 @@
 #![warn(missing_docs)]
 
 pub mod arclength;
+pub mod basins;
 pub mod bifurcation;
 pub mod branches;
 pub mod continuation;
@@ -38,6 +39,7 @@ pub mod progress;
 pub mod record;
 pub mod schedule;
 pub mod seeds;
+pub mod sensitivity;
 pub mod spectrum;
 pub mod sweep;
 pub mod thresholds;

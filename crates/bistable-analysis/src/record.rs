@@ -5,7 +5,7 @@
 use crate::sweep::Classified;
 
 /// Names of the [`Record`] fields, in order: the JSON keys and the map CSV columns.
-pub const COLUMNS: [&str; 16] = [
+pub const COLUMNS: [&str; 23] = [
     "omega",
     "velocity",
     "zeta",
@@ -22,6 +22,13 @@ pub const COLUMNS: [&str; 16] = [
     "periods_simulated",
     "stopped_early",
     "wall_time_s",
+    "sensitive",
+    "runs",
+    "majority_fraction",
+    "outcomes",
+    "sensitivity_trigger",
+    "efoldings",
+    "efoldings_threshold",
 ];
 
 /// One value of a [`Record`].
@@ -72,8 +79,28 @@ pub struct Record {
     pub periods_simulated: f64,
     /// Stopped before the full length.
     pub stopped_early: bool,
-    /// Wall-clock time of this point (s).
+    /// Wall-clock time of this point, all its runs (s).
     pub wall_time_s: f64,
+    /// The runs from perturbed starts did not all reach the same outcome
+    /// ([`crate::sensitivity`]).
+    pub sensitive: bool,
+    /// Verdicts counted: 1, or 1 + the repeats of a suspect point (+ the further Lyapunov
+    /// windows of an aperiodic one).
+    pub runs: u32,
+    /// Share of the runs that reached the reported outcome.
+    pub majority_fraction: f64,
+    /// Every distinct outcome with its share, most frequent first: `class:period:well=share`
+    /// joined by `;` (period `P-n`, `chaotic` or `aperiodic`; well `-` for continuous
+    /// interwell), e.g. `transient_interwell:P-1:2=0.556;continuous_interwell:P-1:-=0.444`.
+    pub outcomes: String,
+    /// Why the point was repeated: `none`, `growth`, `late` or `aperiodic`
+    /// ([`crate::sensitivity::Trigger`]).
+    pub sensitivity_trigger: String,
+    /// Transient growth of the run from the paper's initial condition (e-foldings, capped at
+    /// the threshold); `None` without the test.
+    pub efoldings: Option<f64>,
+    /// The growth from which a decided run is repeated; `None` without the test.
+    pub efoldings_threshold: Option<f64>,
 }
 
 /// The three class names a [`Record`] may hold.
@@ -100,11 +127,18 @@ impl Record {
             periods_simulated: c.periods_simulated,
             stopped_early: c.stopped_early,
             wall_time_s: point.wall_time_s,
+            sensitive: point.sensitivity.sensitive,
+            runs: point.sensitivity.runs,
+            majority_fraction: point.sensitivity.majority_fraction(),
+            outcomes: point.sensitivity.fractions(),
+            sensitivity_trigger: point.sensitivity.trigger.name().to_string(),
+            efoldings: point.sensitivity.efoldings,
+            efoldings_threshold: point.sensitivity.threshold,
         }
     }
 
     /// The values in the order of [`COLUMNS`].
-    pub fn values(&self) -> [Value<'_>; 16] {
+    pub fn values(&self) -> [Value<'_>; 23] {
         let opt_i = |v: Option<u64>| v.map_or(Value::Null, Value::I);
         [
             Value::F(self.omega),
@@ -123,6 +157,13 @@ impl Record {
             Value::F(self.periods_simulated),
             Value::Bool(self.stopped_early),
             Value::F(self.wall_time_s),
+            Value::Bool(self.sensitive),
+            Value::I(u64::from(self.runs)),
+            Value::F(self.majority_fraction),
+            Value::S(&self.outcomes),
+            Value::S(&self.sensitivity_trigger),
+            self.efoldings.map_or(Value::Null, Value::F),
+            self.efoldings_threshold.map_or(Value::Null, Value::F),
         ]
     }
 

@@ -7,28 +7,61 @@ use std::time::Instant as WallClock;
 use bistable_core::{Classification, ClassifyOptions, SimError};
 
 use crate::parallel::{self, Threads};
+use crate::sensitivity::{classify_sensitive, Sensitivity, SensitivityOptions};
 use crate::Model;
 
 /// One classified point.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone)]
 pub struct Classified {
     /// The model at the point.
     pub model: Model,
-    /// The classification.
+    /// The reported classification (of the most frequent outcome when the point was repeated).
     pub classification: Classification,
-    /// Wall-clock time of the classification, in seconds.
+    /// The final-state sensitivity test ([`crate::sensitivity`]).
+    pub sensitivity: Sensitivity,
+    /// Wall-clock time of the classification (all its runs), in seconds.
     pub wall_time_s: f64,
 }
 
-/// Classifies `model`'s point from the paper's initial condition and times it.
+/// Classifies `model`'s point from the paper's initial condition, with the default sensitivity
+/// test ([`SensitivityOptions::default`]), and times it.
 pub fn classify_point(model: &Model, options: ClassifyOptions) -> Result<Classified, SimError> {
+    classify_point_with(model, options, SensitivityOptions::default())
+}
+
+/// [`classify_point`] with the sensitivity test's settings.
+pub fn classify_point_with(
+    model: &Model,
+    options: ClassifyOptions,
+    sensitivity: SensitivityOptions,
+) -> Result<Classified, SimError> {
     let start = WallClock::now();
-    let classification = bistable_core::classify(model.params, model.shaker, model.opts, options)?;
+    let (classification, sensitivity) = classify_sensitive(model, options, sensitivity)?;
     Ok(Classified {
         model: *model,
         classification,
+        sensitivity,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
+}
+
+/// Classifies `model` at every `(Ω, V)` of `points` on `threads` threads, with the default
+/// sensitivity test; see [`classify_points_with`].
+pub fn classify_points<E>(
+    model: &Model,
+    points: &[(f64, f64)],
+    options: ClassifyOptions,
+    threads: Threads,
+    done: impl FnMut(usize, Result<Classified, SimError>) -> Result<(), E>,
+) -> Result<(), E> {
+    classify_points_with(
+        model,
+        points,
+        options,
+        SensitivityOptions::default(),
+        threads,
+        done,
+    )
 }
 
 /// Classifies `model` at every `(Ω, V)` of `points` on `threads` threads. Each result (a point
@@ -36,10 +69,11 @@ pub fn classify_point(model: &Model, options: ClassifyOptions) -> Result<Classif
 /// `done` on the calling thread as it completes, in completion order: `done` is the progress
 /// callback and the place to store or write results, and it cancels the sweep by returning an
 /// error (points in progress finish and are dropped), which is returned.
-pub fn classify_points<E>(
+pub fn classify_points_with<E>(
     model: &Model,
     points: &[(f64, f64)],
     options: ClassifyOptions,
+    sensitivity: SensitivityOptions,
     threads: Threads,
     done: impl FnMut(usize, Result<Classified, SimError>) -> Result<(), E>,
 ) -> Result<(), E> {
@@ -50,7 +84,7 @@ pub fn classify_points<E>(
             model
                 .at(w, v)
                 .map_err(SimError::from)
-                .and_then(|m| classify_point(&m, options))
+                .and_then(|m| classify_point_with(&m, options, sensitivity))
         },
         done,
     )

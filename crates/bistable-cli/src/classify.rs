@@ -4,7 +4,8 @@
 use clap::Args;
 use serde::Serialize;
 
-use bistable_analysis::sweep::classify_point;
+use bistable_analysis::sensitivity::SensitivityOptions;
+use bistable_analysis::sweep::classify_point_with;
 use bistable_core::ClassifyOptions;
 
 use crate::common::CommonArgs;
@@ -32,11 +33,31 @@ Lyapunov exponent (per unit of τ, from the variational equations with saltation
 matrices at impacts) over the next --lyapunov-periods shaker periods tells
 whether it is chaotic (> 1e-3).
 
+Sensitivity: in a chaotic transient, rounding errors of 1e-16 grow like e^(λτ)
+and reach order one after a few hundred time units; which attractor such a run
+ends on is then decided by rounding, and no double-precision run can decide it
+(another tolerance, order or start 1e-12 away ends elsewhere). A run is repeated
+when an infinitesimal perturbation grew by at least --efoldings e-foldings
+before its class was decided (variational equations, over the first
+--repeat-periods natural periods), when it was decided later than that, or when
+it is still aperiodic at the end: --repeats runs (tol x10, x100, and starts
+displaced by --perturbation), and for an aperiodic run --lyapunov-windows
+further Lyapunov windows of its own, each a verdict on 'chaotic'. The point is
+'sensitive' when these do not all agree (class, period, chaos, final well); the
+reported result is the most frequent outcome. Points decided early stay a single
+run; a chaotic attractor that every run reaches and keeps is 'chaotic', not
+sensitive. See docs/sensitivity.md.
+
 Always prints one JSON object (--json is accepted and changes nothing):
   class, period, chaotic, lyapunov, snap_throughs, final_well (1 | 2),
   at_rest_in_second_well, impacts_per_period, sticking, periods_simulated
-  (natural periods τ/2π), stopped_early, wall_time_s, and the inputs omega,
-  velocity, zeta, restitution.";
+  (natural periods τ/2π), stopped_early, wall_time_s, the inputs omega,
+  velocity, zeta, restitution; sensitive, runs (verdicts counted),
+  majority_fraction, outcomes (every distinct outcome with its share, most
+  frequent first: class:period:well=share joined by ';', period P-n, chaotic or
+  aperiodic, well - for continuous interwell), sensitivity_trigger (none |
+  growth | late | aperiodic), efoldings (transient growth, capped at the
+  threshold) and efoldings_threshold. The same keys as the map CSV columns.";
 
 /// Shown after the options by `bistable classify --help`.
 pub const AFTER_HELP: &str = "\
@@ -45,7 +66,9 @@ Exit codes: 0 success; 2 invalid options; 1 the simulation failed.
 Examples:
   bistable classify --omega 0.85 --velocity 0.11     # intrawell, period 4
   bistable classify --omega 0.85 --velocity 0.15     # at rest in well 2
-  bistable classify --omega 2.45 --velocity 0.07     # chaotic
+  bistable classify --omega 2.45 --velocity 0.07     # chaotic (not sensitive)
+  bistable classify --omega 0.85 --velocity 0.13     # sensitive: rest in well 2
+                                                     # or continuous interwell P-1
   bistable classify --omega 0.85 --velocity 0.11 --full --max-periods 5000";
 
 /// How long and how carefully to classify (shared by `classify` and `map`).
@@ -75,6 +98,29 @@ pub struct ClassifyArgs {
     /// [default: 2000 for classify, 300 for map (throughput)].
     #[arg(long, value_name = "N")]
     pub lyapunov_periods: Option<u32>,
+
+    /// Sensitivity test: perturbed repeats of a suspect run (0..=64; 0 turns the test off).
+    #[arg(long, value_name = "K", default_value_t = SensitivityOptions::default().repeats)]
+    pub repeats: u32,
+
+    /// Sensitivity test: transient growth, in e-foldings of an infinitesimal perturbation,
+    /// from which a decided run is suspect and repeated (in (0, 700]).
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().efoldings)]
+    pub efoldings: f64,
+
+    /// Sensitivity test: displacement of the repeats' initial state (x0, x0') from (0, 0)
+    /// (in (0, 1e-3]).
+    #[arg(long, value_name = "D", default_value = "1e-12")]
+    pub perturbation: f64,
+
+    /// Sensitivity test: length of the repeats of an aperiodic run, in natural periods.
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().repeat_periods)]
+    pub repeat_periods: f64,
+
+    /// Sensitivity test: further Lyapunov windows of an aperiodic run, each a verdict on
+    /// 'chaotic' (0..=1024).
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().windows)]
+    pub lyapunov_windows: u32,
 }
 
 impl ClassifyArgs {
@@ -88,6 +134,18 @@ impl ClassifyArgs {
             lyapunov_periods: self.lyapunov_periods.unwrap_or(lyapunov_default),
         }
         .check()?)
+    }
+
+    /// Validated settings of the sensitivity test.
+    pub fn sensitivity(&self) -> Result<SensitivityOptions, CliError> {
+        let so = SensitivityOptions {
+            repeats: self.repeats,
+            efoldings: self.efoldings,
+            perturbation: self.perturbation,
+            repeat_periods: self.repeat_periods,
+            windows: self.lyapunov_windows,
+        };
+        Ok(so.check()?)
     }
 }
 
@@ -127,13 +185,13 @@ impl Serialize for Json<'_> {
 /// The CSV form of a [`Record`] (one row of `bistable map`).
 pub trait RecordCsv: Sized {
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
-    fn fields(&self) -> [Field<'_>; 16];
+    fn fields(&self) -> [Field<'_>; 23];
     /// Parses a CSV row written with [`RecordCsv::fields`] (columns as in [`CSV_COLUMNS`]).
     fn from_csv(cells: &[&str]) -> Result<Self, String>;
 }
 
 impl RecordCsv for Record {
-    fn fields(&self) -> [Field<'_>; 16] {
+    fn fields(&self) -> [Field<'_>; 23] {
         self.values().map(|v| match v {
             Value::F(x) => Field::F(x),
             Value::I(n) => Field::I(n),
@@ -184,6 +242,13 @@ impl RecordCsv for Record {
             periods_simulated: parse(cells, 13)?,
             stopped_early: parse(cells, 14)?,
             wall_time_s: parse(cells, 15)?,
+            sensitive: parse(cells, 16)?,
+            runs: parse(cells, 17)?,
+            majority_fraction: parse(cells, 18)?,
+            outcomes: cells[19].to_string(),
+            sensitivity_trigger: cells[20].to_string(),
+            efoldings: opt(cells, 21)?,
+            efoldings_threshold: opt(cells, 22)?,
         })
     }
 }
@@ -194,7 +259,8 @@ pub fn run(args: &ClassifyCmdArgs) -> Result<(), CliError> {
     let co = args
         .classify
         .options(ClassifyOptions::default().lyapunov_periods)?;
-    print_json(&Json(&Record::new(&classify_point(&model, co)?)))
+    let so = args.classify.sensitivity()?;
+    print_json(&Json(&Record::new(&classify_point_with(&model, co, so)?)))
 }
 
 #[cfg(test)]
@@ -221,6 +287,13 @@ mod tests {
             periods_simulated: 20000.5,
             stopped_early: false,
             wall_time_s: 1.5e-3,
+            sensitive: true,
+            runs: 9,
+            majority_fraction: 7.0 / 9.0,
+            outcomes: "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222".into(),
+            sensitivity_trigger: "growth".into(),
+            efoldings: Some(20.0),
+            efoldings_threshold: Some(20.0),
         };
         let mut line = String::new();
         push_fields(&mut line, &r.fields());

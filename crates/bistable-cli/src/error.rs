@@ -144,6 +144,11 @@ impl From<ParamError> for CliError {
             "max_period" => "--max-period",
             "period_tol" => "--period-tol",
             "lyapunov_periods" => "--lyapunov-periods",
+            "repeats" => "--repeats",
+            "efoldings" => "--efoldings",
+            "perturbation" => "--perturbation",
+            "repeat_periods" => "--repeat-periods",
+            "windows" => "--lyapunov-windows",
             other => return CliError::invalid(other, e.value, e.rule),
         };
         CliError::invalid(option, e.value, e.rule)

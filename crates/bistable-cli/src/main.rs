@@ -27,6 +27,7 @@
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
 //! Result<(), CliError>`, then add a variant to [`Command`] and a line to [`main`].
 
+mod basins;
 mod bifurcation;
 mod branches;
 mod classify;
@@ -88,6 +89,9 @@ enum Command {
 
     /// Bifurcation diagram (Fig. 6/8): max x per shaker cycle and impact phases against Ω or
     /// V, with periodic-orbit branches.
+    #[command(long_about = basins::LONG_ABOUT, after_help = basins::AFTER_HELP)]
+    Basins(basins::BasinsArgs),
+
     #[command(long_about = bifurcation::LONG_ABOUT, after_help = bifurcation::AFTER_HELP)]
     Bifurcation(bifurcation::BifurcationArgs),
 
@@ -117,6 +121,7 @@ fn main() -> ExitCode {
         Command::Simulate(args) => simulate::run(args),
         Command::Classify(args) => classify::run(args),
         Command::Map(args) => map::run(args),
+        Command::Basins(args) => basins::run(args),
         Command::Bifurcation(args) => bifurcation::run(args),
         Command::Orbit(args) => orbit::run(args),
         Command::Thresholds(args) => thresholds::run(args),

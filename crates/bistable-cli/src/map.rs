@@ -10,7 +10,8 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::sweep::{classify_points, interleaved};
+use bistable_analysis::sensitivity::SensitivityOptions;
+use bistable_analysis::sweep::{classify_points_with, interleaved};
 use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
 use bistable_analysis::{Model, Threads};
 use bistable_core::ClassifyOptions;
@@ -36,7 +37,8 @@ Each point starts from the paper's initial condition and runs until its class is
 decided, at most --max-periods natural periods (20,000). To keep a large map
 fast, the largest Lyapunov exponent of an aperiodic point (which decides
 'chaotic') is averaged over 300 shaker periods instead of classify's 2000; set
---lyapunov-periods to change it.
+--lyapunov-periods to change it. Every point gets classify's sensitivity test
+(--repeats 0 turns it off).
 
 Resuming: rows are appended and flushed as points complete (in an interleaved
 order that covers the whole grid early), so an interrupted run loses only the
@@ -52,15 +54,18 @@ pub const AFTER_HELP: &str = "\
 CSV (--out): header and one row per point, in completion order:
   omega,velocity,zeta,restitution,class,period,chaotic,lyapunov,snap_throughs,
   final_well,at_rest_in_second_well,impacts_per_period,sticking,
-  periods_simulated,stopped_early,wall_time_s
-  (the keys of 'bistable classify'; empty period, lyapunov, impacts_per_period
-  mean null).
+  periods_simulated,stopped_early,wall_time_s,sensitive,runs,majority_fraction,
+  outcomes,sensitivity_trigger,efoldings,efoldings_threshold
+  (the keys of 'bistable classify'; empty period, lyapunov,
+  impacts_per_period, efoldings, efoldings_threshold mean null).
 
 PNG (--plot): the paper's colour logic. Hue by the number of snap-throughs over
 the whole run: blue none, green one, orange several; shade by steady-state
 period, dark P-1 to light P-6+ (periods 7..16). Black: chaotic (aperiodic, λ >
 1e-3); grey: aperiodic but not chaotic; purple: converged to rest at the second
-equilibrium x = 1. Lines: the thresholds of Eq. 16–18, single impact
+equilibrium x = 1. Pink hatch: sensitive points (the outcome depends on
+rounding, see 'bistable classify --help'), coloured by their most frequent
+outcome; their share is in the legend and the summary. Lines: the thresholds of Eq. 16–18, single impact
 V = 1/(4(1+e)), interwell V = (1−e)/(2(1+e)), quasi-static V = Ω/2.
 
 Prints a summary (points, wall time, points per second, share of points that
@@ -134,6 +139,12 @@ struct Summary {
     point_time_s: f64,
     /// Share of the grid's points that ran the full `--max-periods`.
     full_length_share: f64,
+    /// Points flagged sensitive (their outcome depends on rounding).
+    sensitive: usize,
+    /// Share of the grid's points flagged sensitive.
+    sensitive_share: f64,
+    /// Points repeated by the sensitivity test (suspect ones).
+    repeated: usize,
     counts: HashMap<String, usize>,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
@@ -162,6 +173,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
     }
     let model = args.model.model(omegas.start, vs.start)?;
     let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;
+    let so = args.classify.sensitivity()?;
     let threads = threads(args.threads, "--threads")?;
 
     let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
@@ -183,7 +195,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         .collect();
 
     let start = WallClock::now();
-    let (computed, failed) = compute(&todo, &model, co, threads, args.out.as_deref(), |r| {
+    let (computed, failed) = compute(&todo, &model, co, so, threads, args.out.as_deref(), |r| {
         done.insert(key(r.omega, r.velocity), r);
     })?;
     let wall = start.elapsed().as_secs_f64();
@@ -221,6 +233,13 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         } else {
             records.iter().filter(|r| !r.stopped_early).count() as f64 / records.len() as f64
         },
+        sensitive: records.iter().filter(|r| r.sensitive).count(),
+        sensitive_share: if records.is_empty() {
+            0.0
+        } else {
+            records.iter().filter(|r| r.sensitive).count() as f64 / records.len() as f64
+        },
+        repeated: records.iter().filter(|r| r.runs > 1).count(),
         counts,
         out: args.out.clone(),
         plot: args.plot.clone(),
@@ -243,10 +262,10 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
 /// `FILE.csv.lock` holding this process's id while it appends to `FILE.csv`, so that two runs
 /// cannot interleave their rows. A lock left by a process that no longer runs (killed) is
 /// taken over.
-struct OutLock(PathBuf);
+pub(crate) struct OutLock(PathBuf);
 
 impl OutLock {
-    fn take(out: &Path) -> Result<Self, CliError> {
+    pub(crate) fn take(out: &Path) -> Result<Self, CliError> {
         let path = PathBuf::from(format!("{}.lock", out.display()));
         if let Ok(text) = std::fs::read_to_string(&path) {
             let pid = text.trim();
@@ -352,6 +371,7 @@ fn compute(
     todo: &[(f64, f64)],
     model: &Model,
     co: ClassifyOptions,
+    so: SensitivityOptions,
     threads: Threads,
     out: Option<&Path>,
     mut sink: impl FnMut(Record),
@@ -370,7 +390,7 @@ fn compute(
         todo.len() as f64,
         format!("classifying {} points", todo.len()),
     );
-    classify_points(model, todo, co, threads, |i, r| {
+    classify_points_with(model, todo, co, so, threads, |i, r| {
         match r {
             Ok(point) => {
                 let rec = Record::new(&point);
@@ -400,7 +420,8 @@ fn human(s: &Summary) -> String {
         "map Ω {} × V {} (ζ = {}, e = {}): {} points, {} computed, {} resumed from the file, \
          {} failed\n\
          wall time {:.1} s on {} threads: {:.1} points/s; {:.1}% of the points ran the full \
-         length\n",
+         length\n\
+         sensitive (the outcome depends on rounding): {} points ({:.2}%); {} points repeated\n",
         s.omega_range,
         s.velocity_range,
         s.zeta,
@@ -412,7 +433,10 @@ fn human(s: &Summary) -> String {
         s.wall_time_s,
         s.threads,
         s.points_per_second,
-        100.0 * s.full_length_share
+        100.0 * s.full_length_share,
+        s.sensitive,
+        100.0 * s.sensitive_share,
+        s.repeated
     );
     for (label, n) in counts {
         text.push_str(&format!("  {n:>7}  {label}\n"));
@@ -604,6 +628,18 @@ fn draw_map(
         ));
     }
     chart.draw_series(rects)?;
+    // Sensitive points: a hatch stroke across the cell.
+    let sensitive: Vec<(f64, f64)> = records
+        .iter()
+        .filter(|r| r.sensitive)
+        .map(|r| (r.omega, r.velocity))
+        .collect();
+    chart.draw_series(sensitive.iter().map(|&(om, v)| {
+        PathElement::new(
+            vec![(om - hw, v - hv), (om + hw, v + hv)],
+            SENSITIVE.stroke_width(2),
+        )
+    }))?;
     // Thresholds, clipped to the chart.
     let to_px = |p: (f64, f64)| chart.backend_coord(&p);
     let (x0, x1) = wx;
@@ -640,12 +676,25 @@ fn draw_map(
         ))?;
         root.draw(&Text::new(text, (x, py - 13), style))?;
     }
-    legend_panel(&right, &present, records.len() + failed.len())
+    legend_panel(
+        &right,
+        &present,
+        records.len() + failed.len(),
+        sensitive.len(),
+    )
 }
+
+/// The hatch of sensitive points.
+const SENSITIVE: RGBColor = RGBColor(255, 20, 147);
 
 /// The colour key: a table of hue (snap-throughs) × shade (period), then the other categories
 /// with their counts.
-fn legend_panel(area: &Area<'_>, present: &HashMap<Category, usize>, n: usize) -> DrawResult {
+fn legend_panel(
+    area: &Area<'_>,
+    present: &HashMap<Category, usize>,
+    n: usize,
+    sensitive: usize,
+) -> DrawResult {
     let text = |size| (FONT, size).into_font().color(&BLACK);
     let y0 = 40;
     area.draw(&Text::new("Colour key", (12, y0), plot::left(text(20))))?;
@@ -723,5 +772,27 @@ fn legend_panel(area: &Area<'_>, present: &HashMap<Category, usize>, n: usize) -
         ))?;
         y += 50;
     }
+    // Sensitive points: the same hatch on a neutral cell.
+    area.draw(&Rectangle::new(
+        [(14, y - 11), (36, y + 11)],
+        RGBColor(200, 200, 200).filled(),
+    ))?;
+    area.draw(&PathElement::new(
+        vec![(14, y + 11), (36, y - 11)],
+        SENSITIVE.stroke_width(2),
+    ))?;
+    area.draw(&Text::new(
+        "sensitive: outcome decided by rounding",
+        (46, y - 1),
+        plot::left(text(15)),
+    ))?;
+    area.draw(&Text::new(
+        format!(
+            "{sensitive} points ({:.1}%), colour of the most frequent",
+            100.0 * sensitive as f64 / n.max(1) as f64
+        ),
+        (46, y + 17),
+        plot::left(text(13).color(&RGBColor(90, 90, 90))),
+    ))?;
     Ok(())
 }

@@ -131,6 +131,285 @@ fn classify_reports_the_paper_classes() {
     );
 }
 
+/// The `outcomes` of a classify JSON as `(class:period:well, share)`, most frequent first.
+fn outcomes(c: &Value) -> Vec<(String, f64)> {
+    c["outcomes"]
+        .as_str()
+        .unwrap()
+        .split(';')
+        .map(|o| {
+            let (k, f) = o.split_once('=').unwrap();
+            (k.to_string(), f.parse().unwrap())
+        })
+        .collect()
+}
+
+#[test]
+fn classify_flags_points_whose_outcome_rounding_decides() {
+    // The paper's (0.85, 0.13): a chaotic transient of hundreds of shaker periods ends at rest
+    // in well 2 or on the continuous interwell P-1 orbit, depending on rounding.
+    let c = json(&["classify", "--omega", "0.85", "--velocity", "0.13"]);
+    assert_eq!(c["sensitive"], true, "{c}");
+    assert_eq!(c["runs"], 9);
+    assert_eq!(c["sensitivity_trigger"], "growth");
+    let o = outcomes(&c);
+    let mut keys: Vec<&str> = o.iter().map(|x| x.0.as_str()).collect();
+    keys.sort();
+    assert_eq!(
+        keys,
+        ["continuous_interwell:P-1:-", "transient_interwell:P-1:2"],
+        "{c}"
+    );
+    // Shares are multiples of 1/9 printed to 3 decimals.
+    assert!((o.iter().map(|x| x.1).sum::<f64>() - 1.0).abs() < 2e-3);
+    // The reported class is the most frequent outcome.
+    assert!(o[0].0.starts_with(c["class"].as_str().unwrap()), "{c}");
+    assert!((c["majority_fraction"].as_f64().unwrap() - o[0].1).abs() < 1e-3);
+    assert!(c["efoldings"].as_f64().unwrap() >= c["efoldings_threshold"].as_f64().unwrap());
+
+    // Decided early with little growth: a single run, identical to a run without the test.
+    for (w, v) in [("1.75", "0.07"), ("0.85", "0.11"), ("0.85", "0.15")] {
+        let c = json(&["classify", "--omega", w, "--velocity", v]);
+        assert_eq!(
+            (c["sensitive"].clone(), c["runs"].clone()),
+            (false.into(), 1.into()),
+            "{c}"
+        );
+        assert_eq!(c["sensitivity_trigger"], "none");
+        let plain = json(&["classify", "--omega", w, "--velocity", v, "--repeats", "0"]);
+        for k in [
+            "class",
+            "period",
+            "snap_throughs",
+            "final_well",
+            "periods_simulated",
+        ] {
+            assert_eq!(c[k], plain[k], "{w} {v} {k}");
+        }
+        assert_eq!(plain["efoldings"], Value::Null);
+    }
+
+    // A chaotic attractor reached and kept by every run is a determinate outcome.
+    let c = json(&["classify", "--omega", "2.45", "--velocity", "0.07"]);
+    assert_eq!(c["sensitive"], false, "{c}");
+    assert_eq!(c["chaotic"], true);
+    assert_eq!(c["sensitivity_trigger"], "aperiodic");
+    assert_eq!(c["outcomes"], "intrawell:chaotic:1=1.000");
+}
+
+/// Every point of the 60 × 40 map grid whose label changes between tol 1e-16, 1e-15 and 1e-14
+/// (`tests/data/tol_flips_60x40.csv`, see `tests/data/README.md`) is flagged sensitive, with the
+/// map's Lyapunov window of 300 shaker periods. Two are chaotic attractors on which a window
+/// now and then meets sticking or a near-periodic stretch and reports "not chaotic" (about one
+/// window in 43 and one in 6.5): the default 8 further windows do not meet such a window there,
+/// 256 do.
+#[test]
+fn every_point_whose_label_flips_with_tol_is_sensitive() {
+    let text = include_str!("data/tol_flips_60x40.csv");
+    let points: Vec<(String, String)> = text
+        .lines()
+        .skip(1)
+        .map(|l| {
+            let mut f = l.split(',');
+            (f.next().unwrap().to_string(), f.next().unwrap().to_string())
+        })
+        .collect();
+    assert_eq!(points.len(), 19);
+    let rare = [
+        ("2.716949152542373", "0.015"),
+        ("3.1084745762711865", "0.02"),
+    ];
+    let results: Vec<(bool, Value)> = std::thread::scope(|s| {
+        let handles: Vec<_> = points
+            .iter()
+            .map(|(w, v)| {
+                let windows = if rare.contains(&(w.as_str(), v.as_str())) {
+                    "256"
+                } else {
+                    "8"
+                };
+                s.spawn(move || {
+                    let c = json(&[
+                        "classify",
+                        "--omega",
+                        w,
+                        "--velocity",
+                        v,
+                        "--lyapunov-periods",
+                        "300",
+                        "--lyapunov-windows",
+                        windows,
+                    ]);
+                    (c["sensitive"] == true, c)
+                })
+            })
+            .collect();
+        handles.into_iter().map(|h| h.join().unwrap()).collect()
+    });
+    let missed: Vec<String> = results
+        .iter()
+        .filter(|r| !r.0)
+        .map(|r| {
+            format!(
+                "({}, {}): {}",
+                r.1["omega"], r.1["velocity"], r.1["outcomes"]
+            )
+        })
+        .collect();
+    assert!(missed.is_empty(), "not flagged: {missed:#?}");
+}
+
+#[test]
+fn basins_find_coexisting_attractors_and_resume() {
+    let dir = scratch("basins");
+    let (csv, png) = (dir.join("basins.csv"), dir.join("basins.png"));
+    let args = |extra: &[&str]| {
+        let mut a: Vec<String> = [
+            "basins",
+            "--omega",
+            "1.45",
+            "--velocity",
+            "0.05",
+            "--x-range",
+            "0:1.2:24",
+            "--v-range",
+            "-0.6:0.6:24",
+            "--uncertainty-samples",
+            "60",
+            "--out",
+            s(&csv),
+            "--plot",
+            s(&png),
+            "--json",
+        ]
+        .iter()
+        .map(|x| x.to_string())
+        .collect();
+        a.extend(extra.iter().map(|x| x.to_string()));
+        a
+    };
+    let run = |a: Vec<String>| json(&a.iter().map(String::as_str).collect::<Vec<_>>());
+    let b = run(args(&[]));
+    assert_png(&png);
+    assert_eq!(b["points"], 576);
+    let attractors = b["attractors"].as_array().unwrap();
+    // Rest in well 2 and a P-1 orbit in well 1 coexist (and share most of the plane).
+    let labels: Vec<&str> = attractors
+        .iter()
+        .map(|a| a["label"].as_str().unwrap())
+        .collect();
+    assert!(labels.contains(&"rest in well 2"), "{labels:?}");
+    assert!(
+        labels.iter().any(|l| l.starts_with("P-1 in well 1")),
+        "{labels:?}"
+    );
+    let total: f64 = attractors
+        .iter()
+        .map(|a| a["fraction"].as_f64().unwrap())
+        .sum();
+    assert!((total - 1.0).abs() < 1e-12);
+    assert!(attractors
+        .iter()
+        .all(|a| a["fraction"].as_f64().unwrap() >= 0.0));
+    // Every start's row agrees with `classify` run from the same state: the start (0, 0) at
+    // phase 0 is the paper's initial condition.
+    let rows = csv_rows(&csv);
+    assert_eq!(rows.len(), 576);
+    let origin = rows
+        .iter()
+        .find(|r| r["x0"] == "0" && r["v0"] == "-0.6")
+        .expect("a row at x0 = 0");
+    assert!(!origin["class"].is_empty());
+    // f(ε) is a fraction and the exponent, when measured, positive.
+    for u in b["uncertainty"].as_array().unwrap() {
+        let f = u["fraction"].as_f64().unwrap();
+        assert!((0.0..=1.0).contains(&f));
+    }
+    if let Some(a) = b["uncertainty_exponent"].as_f64() {
+        assert!(a > 0.0 && a <= 1.5, "{a}");
+    }
+    // A rerun resumes every start and finds the same attractors.
+    let again = run(args(&[]));
+    assert_eq!(
+        (again["computed"].clone(), again["resumed"].clone()),
+        (0.into(), 576.into())
+    );
+    assert_eq!(again["attractors"], b["attractors"]);
+
+    // Starts below the plate are refused, naming the option: at a quarter cycle the plate is at
+    // its top, V/Ω = 0.0345.
+    let o = bistable(&[
+        "basins",
+        "--omega",
+        "1.45",
+        "--velocity",
+        "0.05",
+        "--phase",
+        "0.25",
+        "--x-range",
+        "0:1:4",
+        "--plot",
+        "x.png",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(
+        stderr(&o).contains("--x-range") && stderr(&o).contains("below the plate"),
+        "{}",
+        stderr(&o)
+    );
+    let o = bistable(&[
+        "basins",
+        "--omega",
+        "1.45",
+        "--velocity",
+        "0.05",
+        "--phase",
+        "1.5",
+        "--plot",
+        "x.png",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--phase"), "{}", stderr(&o));
+}
+
+#[test]
+fn basin_cells_match_classify_from_the_paper_start() {
+    // The cell (0, 0) at phase 0 is the paper's initial condition: the same outcome as
+    // `classify` (whose decided-early runs are single runs).
+    let dir = scratch("basins1");
+    let csv = dir.join("b.csv");
+    for (w, v) in [("0.85", "0.11"), ("1.75", "0.07"), ("0.85", "0.15")] {
+        let _ = std::fs::remove_file(&csv);
+        let b = json(&[
+            "basins",
+            "--omega",
+            w,
+            "--velocity",
+            v,
+            "--x-range",
+            "0:0:1",
+            "--v-range",
+            "0:0:1",
+            "--uncertainty-samples",
+            "0",
+            "--max-periods",
+            "20000",
+            "--out",
+            s(&csv),
+            "--json",
+        ]);
+        let c = json(&["classify", "--omega", w, "--velocity", v]);
+        let row = &csv_rows(&csv)[0];
+        assert_eq!(row["class"], c["class"].as_str().unwrap(), "{w} {v}");
+        assert_eq!(row["period"], c["period"].to_string(), "{w} {v}");
+        assert_eq!(
+            row["periods_simulated"].parse::<f64>().unwrap(),
+            c["periods_simulated"].as_f64().unwrap()
+        );
+        assert_eq!(b["attractors"].as_array().unwrap().len(), 1);
+    }
+}
+
 #[test]
 fn period_doubling_into_chaos_at_v_0_07() {
     let dir = scratch("bifurcation");
@@ -401,7 +680,7 @@ fn map_writes_resumes_and_classifies() {
     assert_eq!(resumed["resumed"].as_u64(), Some(7));
     let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 9);
-    assert!(rows.iter().all(|r| r.len() == 16), "no broken rows");
+    assert!(rows.iter().all(|r| r.len() == 23), "no broken rows");
 
     // No lock is left behind; a lock held by a live process (this test) refuses the run, a
     // stale one (no such process) is taken over.
@@ -642,6 +921,7 @@ fn every_analysis_has_help() {
     for (cmd, needle) in [
         ("classify", "intrawell"),
         ("map", "Resuming"),
+        ("basins", "Uncertainty exponent"),
         ("bifurcation", "Hermite"),
         ("orbit", "Floquet"),
         ("thresholds", "1/(4(1+e))"),

@@ -126,6 +126,21 @@ pub struct Classification {
     pub periods_simulated: f64,
     /// Whether the run stopped before `max_natural_periods`.
     pub stopped_early: bool,
+    /// Transient growth: the natural log of the largest amplification of an infinitesimal
+    /// perturbation over any stretch of the run before its class was decided (from the
+    /// variational equations, renormalised once per shaker period; sticking forgets the past and
+    /// starts a new stretch). Tracking stops once the growth reaches the cap given to
+    /// [`classify_from`], so values at the cap mean "at least", or after the number of periods
+    /// given there. `None` when not tracked.
+    pub transient_efoldings: Option<f64>,
+    /// For an aperiodic response with extra Lyapunov windows asked of [`classify_from`]: how
+    /// many of them found `λ > 1e-3` (chaotic), and how many there were. `None` otherwise.
+    pub chaos_votes: Option<(u32, u32)>,
+    /// For a periodic response: the stroboscopic section point `(x, x')` (plate phase 0) of the
+    /// steady-state cycle with the smallest `x`, a label of the orbit that does not depend on
+    /// where along the cycle the run stopped (two coexisting orbits of the same period differ
+    /// here). `None` when aperiodic.
+    pub cycle_anchor: Option<[f64; 2]>,
 }
 
 /// Per-section record.
@@ -144,11 +159,47 @@ pub fn classify(
     opts: SolverOptions,
     co: ClassifyOptions,
 ) -> Result<Classification, SimError> {
+    classify_from(params, plate, opts, co, (0.0, 0.0), Tracking::default())
+}
+
+/// What [`classify_from`] measures besides the classification.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Tracking {
+    /// Track the transient growth until it reaches this many e-foldings
+    /// ([`Classification::transient_efoldings`]).
+    pub efoldings_cap: Option<f64>,
+    /// ... and for at most this many shaker periods (`0`: no limit); the growth then is that
+    /// of this first stretch of the run.
+    pub track_periods: u64,
+    /// For an aperiodic response, this many further Lyapunov windows of `lyapunov_periods`
+    /// after the one that decides `chaotic` ([`Classification::chaos_votes`]).
+    pub extra_windows: u32,
+    /// Skip the Lyapunov exponent of an aperiodic response (`lyapunov` is then `None` and
+    /// `chaotic` false): for runs that only ask whether a period is reached.
+    pub no_lyapunov: bool,
+}
+
+/// Classifies the response from the state `(x0, x0')` at `τ = 0` (the plate's phase and mean
+/// position there are the sinusoid's origin; `x0` must not be below the plate), measuring what
+/// `track` asks for; tracking does not change the trajectory or the classification.
+pub fn classify_from(
+    params: Params,
+    plate: Sinusoid,
+    opts: SolverOptions,
+    co: ClassifyOptions,
+    start: (f64, f64),
+    track: Tracking,
+) -> Result<Classification, SimError> {
+    let efoldings_cap = track.efoldings_cap;
     let period_len = plate.period();
     let max_sections = (co.max_natural_periods * std::f64::consts::TAU / period_len)
         .ceil()
         .max(1.0) as u64;
-    let mut sim = Simulator::new(params, plate.into(), opts)?;
+    let mut sim = Simulator::with_state(params, plate.into(), opts, 0.0, start.0, start.1)?;
+    let mut growth = efoldings_cap.map(|cap| {
+        sim.start_variational();
+        Growth::new(cap)
+    });
     let keep = (4 * co.max_period + 8) as usize;
     let mut hist: VecDeque<Section> = VecDeque::with_capacity(keep + 1);
     let mut sticks = 0u64;
@@ -169,6 +220,13 @@ pub fn classify(
         });
         if hist.len() > keep {
             hist.pop_front();
+        }
+        if let Some(g) = growth.as_mut() {
+            g.section(&mut sim);
+            if track.track_periods > 0 && k >= track.track_periods && g.live {
+                g.live = false;
+                sim.disable_variational();
+            }
         }
         let rest = at_rest_in_well_two(&sim, plate);
         let found = if rest {
@@ -214,14 +272,36 @@ pub fn classify(
         per_window(|s| s.impacts)
     };
     let sticking = !at_rest && per_window(|s| s.sticks).is_some_and(|n| n > 0);
+    let cycle_anchor = period.map(|p| {
+        hist.iter()
+            .rev()
+            .take(p as usize)
+            .map(|s| s.y)
+            .fold([f64::INFINITY, 0.0], |a, y| if y[0] < a[0] { y } else { a })
+    });
+    let transient_efoldings = growth.as_ref().map(|g| g.max.min(g.cap));
+    if growth.is_some() {
+        sim.disable_variational();
+    }
     let lyapunov = match period {
         Some(_) => None,
+        None if track.no_lyapunov => None,
         None => lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?,
+    };
+    let chaos_votes = if period.is_none() && track.extra_windows > 0 && !track.no_lyapunov {
+        let mut chaotic = 0;
+        for _ in 0..track.extra_windows {
+            let l = lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?;
+            chaotic += u32::from(l.is_some_and(|l| l > CHAOS));
+        }
+        Some((chaotic, track.extra_windows))
+    } else {
+        None
     };
     Ok(Classification {
         class,
         period,
-        chaotic: period.is_none() && lyapunov.is_some_and(|l| l > 1e-3),
+        chaotic: period.is_none() && lyapunov.is_some_and(|l| l > CHAOS),
         lyapunov,
         snap_throughs: stats.snap_throughs,
         final_well: sim.state().well,
@@ -230,7 +310,59 @@ pub fn classify(
         sticking,
         periods_simulated: k as f64 * period_len / std::f64::consts::TAU,
         stopped_early: k < max_sections,
+        transient_efoldings,
+        chaos_votes,
+        cycle_anchor,
     })
+}
+
+/// Largest Lyapunov exponent (per unit of `τ`) above which an aperiodic response is chaotic.
+const CHAOS: f64 = 1e-3;
+
+/// Largest growth of the variational solution over any stretch of sections (the largest
+/// rise of its accumulated log-norm), until it reaches `cap`.
+struct Growth {
+    cap: f64,
+    acc: f64,
+    low: f64,
+    max: f64,
+    live: bool,
+}
+
+impl Growth {
+    fn new(cap: f64) -> Self {
+        Self {
+            cap,
+            acc: 0.0,
+            low: 0.0,
+            max: 0.0,
+            live: true,
+        }
+    }
+
+    fn section(&mut self, sim: &mut Simulator) {
+        if !self.live {
+            return;
+        }
+        match sim.renormalize_variational() {
+            Some(l) => {
+                self.acc += l;
+                self.low = self.low.min(self.acc);
+                self.max = self.max.max(self.acc - self.low);
+            }
+            None => {
+                // Stuck (Φ = 0): the past is forgotten; a new stretch starts with the next
+                // free flight.
+                self.acc = 0.0;
+                self.low = 0.0;
+                sim.reseed_variational();
+            }
+        }
+        if self.max >= self.cap {
+            self.live = false;
+            sim.disable_variational();
+        }
+    }
 }
 
 fn confirm_len(p: u32) -> u32 {

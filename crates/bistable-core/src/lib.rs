@@ -34,7 +34,10 @@ pub mod time;
 
 pub use audit::GapAudit;
 pub use checkpoint::{Checkpoint, PlateRecord};
-pub use classify::{classify, largest_lyapunov, Classification, ClassifyOptions, ResponseClass};
+pub use classify::{
+    classify, classify_from, largest_lyapunov, Classification, ClassifyOptions, ResponseClass,
+    Tracking,
+};
 pub use events::{ContactMode, Event, Impact, StickCause, Well};
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use ramp::SetpointRamp;

@@ -268,6 +268,8 @@ pub struct Simulator {
 struct Variational {
     phi: [[f64; 2]; 2],
     cols: [[f64; BUF]; 2],
+    /// Set `phi = I` at the start of the next step (see `Simulator::reseed_variational`).
+    reseed: bool,
 }
 
 /// Flights shorter than this count towards the Zeno guard (time units).
@@ -565,11 +567,41 @@ impl Simulator {
         self.var = Some(Variational {
             phi: [[1.0, 0.0], [0.0, 1.0]],
             cols: [[0.0; BUF]; 2],
+            reseed: false,
         });
         self.restart_at_now(&st, st.z, st.zdot);
         if let Some(v) = self.var.as_mut() {
             v.phi = [[1.0, 0.0], [0.0, 1.0]];
         }
+    }
+
+    /// Like [`Simulator::enable_variational`], but without restarting the step when no step has
+    /// been taken from the current instant yet (a fresh simulator), so that the trajectory is
+    /// exactly the one without variational equations.
+    pub fn start_variational(&mut self) {
+        if !self.live && self.now == self.t0 {
+            self.var = Some(Variational {
+                phi: [[1.0, 0.0], [0.0, 1.0]],
+                cols: [[0.0; BUF]; 2],
+                reseed: false,
+            });
+        } else {
+            self.enable_variational();
+        }
+    }
+
+    /// Restarts the variational solution from `Φ = I` at the start of the next free-flight
+    /// step, without restarting the integration (the trajectory is not affected): for a
+    /// variation that sticking has set to zero.
+    pub fn reseed_variational(&mut self) {
+        if let Some(v) = self.var.as_mut() {
+            v.reseed = true;
+        }
+    }
+
+    /// Stops integrating the variational equations (the trajectory is not affected).
+    pub fn disable_variational(&mut self) {
+        self.var = None;
     }
 
     /// `Φ(now)`, row-major over `(x, x')`, if enabled.
@@ -735,6 +767,10 @@ impl Simulator {
                     return Ok(());
                 }
                 if let Some(v) = self.var.as_mut() {
+                    if v.reseed {
+                        v.phi = [[1.0, 0.0], [0.0, 1.0]];
+                        v.reseed = false;
+                    }
                     let [dx, dv] = v.phi;
                     v.cols = [
                         taylor::variation(zeta, s, p, dx[0], dv[0]),

@@ -10,12 +10,14 @@
 //! One module per area of the API, each registered in `_native` below: `simulate`
 //! (`simulate`, `Simulator`), `classify` (`classify`, the point lists of `sweep.map`,
 //! `thresholds`), `orbit` (`orbit`, `continue_omega`), `bifurcation`, `energy` (`energy_map`),
-//! `spectrum`; `common` holds the argument checks, the model, the tables and the Ctrl-C check
-//! shared by them. A new area (e.g. basins) is a new module with its `#[pyfunction]`s, one
-//! `add_function` line here and its wrapper in `python/bistable_impact/`.
+//! `spectrum`, `basins` (the cells and attractors of `sweep.basins`); `common` holds the argument
+//! checks, the model, the tables and the Ctrl-C check shared by them. A new area is a new module
+//! with its `#[pyfunction]`s, one `add_function` line here and its wrapper in
+//! `python/bistable_impact/`.
 
 use pyo3::prelude::*;
 
+mod basins;
 mod bifurcation;
 mod classify;
 mod common;
@@ -42,6 +44,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(bifurcation::bifurcation, m)?)?;
     m.add_function(wrap_pyfunction!(energy::energy_map, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum::spectrum, m)?)?;
+    m.add_function(wrap_pyfunction!(basins::basin_cells, m)?)?;
+    m.add_function(wrap_pyfunction!(basins::basin_attractors, m)?)?;
     m.add_function(wrap_pyfunction!(linspace, m)?)?;
     // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;

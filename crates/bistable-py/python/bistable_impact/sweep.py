@@ -174,3 +174,7 @@ def map(
     if store is not None:
         df.to_csv(store, index=False)
     return df
+
+
+# Basins of attraction (`bistable basins`), kept in their own module.
+from .basins import basins  # noqa: E402,F401

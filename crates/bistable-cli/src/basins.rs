@@ -1,0 +1,733 @@
+//! `bistable basins`: basins of attraction over a grid of initial states `(x0, x0')` at one
+//! plate phase for one shaker point `(Ω, V)`, computed in parallel, written row by row to a
+//! resumable CSV file, drawn as a PNG, with the attractors and the uncertainty exponent.
+
+use std::collections::HashMap;
+use std::io::{BufRead, BufReader};
+use std::path::{Path, PathBuf};
+use std::time::Instant as WallClock;
+
+use clap::{ArgGroup, Args};
+use plotters::prelude::*;
+use serde::Serialize;
+
+use bistable_analysis::basins::{
+    classify_starts, identify, plate_at, uncertainty, uncertainty_exponent, Attractor, Cell,
+    Uncertain,
+};
+use bistable_analysis::sensitivity::Outcome;
+use bistable_analysis::sweep::interleaved;
+use bistable_analysis::Model;
+use bistable_core::{ClassifyOptions, ResponseClass, Well};
+
+use crate::common::{threads, CommonArgs};
+use crate::error::CliError;
+use crate::map::OutLock;
+use crate::output::{print_json, print_text, CsvFile, Field};
+use crate::plot::{self, header, Area, DrawResult, FONT};
+use crate::progress::Progress;
+use crate::ranges::{Range, MAX_POINTS};
+
+/// Long description shown by `bistable basins --help`.
+pub const LONG_ABOUT: &str = "\
+Basins of attraction at one shaker point (Ω, V): every start (x0, x0') of a grid, at
+τ = 0 with the plate at phase --phase (cycles), is classified as 'bistable
+classify' does (until the period repeats or the mass rests in well 2, at most
+--max-periods natural periods; aperiodic starts are chaotic when λ > 1e-3 over
+--lyapunov-periods shaker periods). Starts that reach the same attractor are
+grouped; attractors are numbered by basin size and named by class, period,
+final well and, when periodic, the section point (x, x') at plate phase 0 of
+their cycle with the smallest x (coexisting orbits of one period and class,
+e.g. low- and high-energy P-1 in well 1, differ there).
+
+Uncertainty exponent (Grebogi, McDonald, Ott & Yorke 1983): a start is
+ε-uncertain when x0 ± ε reaches another attractor. The fraction f(ε) of
+uncertain starts among --uncertainty-samples grid cells is measured at ε = the
+x0 step times 1, 1/4, 1/16, 1/64, 1/256; α is the least-squares slope of ln f
+against ln ε, and 2 − α the dimension of the basin boundary (α near 1: smooth
+boundaries; small α: fractal, the attractor of a start near the boundary is
+practically unpredictable).
+
+Starts below the plate (x0 < z at that phase) are refused (exit 2, naming
+--x-range). Resuming: rows are appended and flushed as cells complete, in an
+interleaved order; the same command again skips the cells already in --out
+(rows with another Ω, V, phase, ζ or e are refused). The uncertainty samples
+are recomputed on every run.";
+
+/// Shown after the options by `bistable basins --help`.
+pub const AFTER_HELP: &str = "\
+CSV (--out): x0,v0,omega,velocity,phase,zeta,restitution,class,period,chaotic,
+  final_well,anchor_x,anchor_v,at_rest_in_second_well,periods_simulated (class
+  of the start's own run; period and anchor empty when aperiodic, anchor empty at
+  rest; final_well empty for continuous interwell).
+
+PNG (--plot): cells coloured by attractor; the legend lists the attractors with
+their basin fractions and the uncertainty exponent.
+
+Prints a summary (attractors, fractions, f(ε), α); JSON with --json.
+
+Exit codes: 0 success; 2 invalid options or a --out file that does not fit;
+1 a file could not be written or some starts failed (the others are saved).
+
+Examples:
+  bistable basins --omega 1.45 --velocity 0.05 --x-range 0:1.2:200 \\
+      --v-range -0.6:0.6:200 --out out/basins.csv --plot out/basins.png";
+
+/// Options of `bistable basins`.
+#[derive(Debug, Clone, Args)]
+#[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot"])))]
+pub struct BasinsArgs {
+    #[command(flatten)]
+    pub common: CommonArgs,
+
+    /// Plate phase at the start τ = 0, in cycles [0, 1).
+    #[arg(
+        long,
+        value_name = "CYCLES",
+        default_value_t = 0.0,
+        allow_negative_numbers = true
+    )]
+    pub phase: f64,
+
+    /// Start positions x0 A:B:N (not below the plate at --phase).
+    #[arg(
+        long,
+        value_name = "A:B:N",
+        default_value = "-0.3:0.5:100",
+        allow_hyphen_values = true
+    )]
+    pub x_range: Range,
+
+    /// Start velocities x0' A:B:N.
+    #[arg(
+        long,
+        value_name = "A:B:N",
+        default_value = "-0.6:0.6:100",
+        allow_hyphen_values = true
+    )]
+    pub v_range: Range,
+
+    /// Longest run of a start, in natural periods τ/2π.
+    #[arg(long, value_name = "N", default_value_t = 2_000.0)]
+    pub max_periods: f64,
+
+    /// Shaker periods averaged for the Lyapunov exponent of an aperiodic start.
+    #[arg(long, value_name = "N", default_value_t = 300)]
+    pub lyapunov_periods: u32,
+
+    /// Grid cells sampled for the uncertainty exponent (0: skip it).
+    #[arg(long, value_name = "N", default_value_t = 400)]
+    pub uncertainty_samples: usize,
+
+    /// Append one row per start to FILE.csv, skipping starts already in it.
+    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
+    pub out: Option<PathBuf>,
+
+    /// Draw the basins to FILE.png.
+    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
+    pub plot: Option<PathBuf>,
+
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+}
+
+/// CSV header of `basins`.
+pub const COLUMNS: [&str; 15] = [
+    "x0",
+    "v0",
+    "omega",
+    "velocity",
+    "phase",
+    "zeta",
+    "restitution",
+    "class",
+    "period",
+    "chaotic",
+    "final_well",
+    "anchor_x",
+    "anchor_v",
+    "at_rest_in_second_well",
+    "periods_simulated",
+];
+
+#[derive(Debug, Serialize)]
+struct AttractorJson {
+    number: usize,
+    label: String,
+    across_barrier: bool,
+    at_rest_in_second_well: bool,
+    period: Option<u32>,
+    chaotic: bool,
+    final_well: Option<u8>,
+    anchor: Option<[f64; 2]>,
+    cells: usize,
+    fraction: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct UncertainJson {
+    epsilon: f64,
+    samples: usize,
+    uncertain: usize,
+    fraction: f64,
+}
+
+#[derive(Debug, Serialize)]
+struct Summary {
+    omega: f64,
+    velocity: f64,
+    phase: f64,
+    zeta: f64,
+    restitution: f64,
+    x_range: String,
+    v_range: String,
+    plate_x: f64,
+    points: usize,
+    computed: usize,
+    resumed: usize,
+    failed: usize,
+    threads: usize,
+    wall_time_s: f64,
+    attractors: Vec<AttractorJson>,
+    uncertainty: Vec<UncertainJson>,
+    uncertainty_exponent: Option<f64>,
+    boundary_dimension: Option<f64>,
+    out: Option<PathBuf>,
+    plot: Option<PathBuf>,
+}
+
+type Key = (u64, u64);
+
+fn key(x: f64, v: f64) -> Key {
+    (x.to_bits(), v.to_bits())
+}
+
+fn label(a: &Attractor) -> String {
+    let mut s = a.steady.label();
+    if let Some(x) = a.anchor {
+        s.push_str(&format!(" (x = {:.4}, x' = {:.4})", x[0], x[1]));
+    }
+    s
+}
+
+/// Runs `bistable basins`.
+pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
+    let model = args.common.model()?;
+    let phase = args.phase;
+    if !(phase.is_finite() && (0.0..1.0).contains(&phase)) {
+        return Err(CliError::invalid(
+            "--phase",
+            phase,
+            "must be in [0, 1) (cycles)",
+        ));
+    }
+    let (plate_x, _) = plate_at(&model, phase)?;
+    let xs = args
+        .x_range
+        .check("--x-range", f64::is_finite, "must be finite")?;
+    let vs = args
+        .v_range
+        .check("--v-range", f64::is_finite, "must be finite")?;
+    let (xlo, _) = xs.bounds();
+    if xlo < plate_x {
+        return Err(CliError::invalid_text(
+            "--x-range",
+            xs,
+            format!(
+                "starts below the plate: at phase {phase} the plate is at z = {plate_x:.6}, so \
+                 x0 must be >= {plate_x:.6}"
+            ),
+        ));
+    }
+    if xs.n.saturating_mul(vs.n) > MAX_POINTS {
+        return Err(CliError::invalid_text(
+            "--x-range",
+            xs,
+            format!("the grid has more than {MAX_POINTS} points"),
+        ));
+    }
+    let co = ClassifyOptions {
+        max_natural_periods: args.max_periods,
+        lyapunov_periods: args.lyapunov_periods,
+        ..ClassifyOptions::default()
+    }
+    .check()?;
+    let threads = threads(args.threads, "--threads")?;
+
+    let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
+    let mut done: HashMap<Key, Cell> = HashMap::new();
+    if let Some(out) = &args.out {
+        for c in read_existing(out, &model, phase)? {
+            done.insert(key(c.x0, c.v0), c);
+        }
+    }
+    let grid: Vec<(f64, f64)> = interleaved(xs.n * vs.n)
+        .map(|k| (xs.value(k % xs.n), vs.value(k / xs.n)))
+        .collect();
+    let resumed = grid
+        .iter()
+        .filter(|&&(x, v)| done.contains_key(&key(x, v)))
+        .count();
+    let todo: Vec<(f64, f64)> = grid
+        .iter()
+        .copied()
+        .filter(|&(x, v)| !done.contains_key(&key(x, v)))
+        .collect();
+
+    let start = WallClock::now();
+    let mut csv = match &args.out {
+        Some(p) if p.exists() => Some(CsvFile::append(p)?),
+        Some(p) => Some(CsvFile::create(p, &COLUMNS.join(","))?),
+        None => None,
+    };
+    let mut failed = Vec::new();
+    let mut computed = 0usize;
+    let mut progress = Progress::new(todo.len() as f64, format!("basins: {} starts", todo.len()));
+    classify_starts(&model, phase, co, &todo, threads, |i, r| {
+        match r {
+            Ok(cell) => {
+                if let Some(c) = csv.as_mut() {
+                    c.row(&row(&cell, &model, phase))?;
+                    c.flush()?;
+                }
+                done.insert(key(cell.x0, cell.v0), cell);
+                computed += 1;
+            }
+            Err(e) => failed.push((todo[i], CliError::from(e))),
+        }
+        progress.set((computed + failed.len()) as f64);
+        Ok::<(), CliError>(())
+    })?;
+    progress.finish();
+    if let Some(c) = csv {
+        c.finish()?;
+    }
+    for ((x, v), e) in &failed {
+        eprintln!("warning: x0 = {x}, x0' = {v}: {e}");
+    }
+
+    // Attractors over the grid's cells, in grid order.
+    let cells: Vec<Cell> = (0..xs.n * vs.n)
+        .filter_map(|k| {
+            done.get(&key(xs.value(k % xs.n), vs.value(k / xs.n)))
+                .copied()
+        })
+        .collect();
+    let (attractors, index) = identify(&cells);
+
+    // Uncertainty fraction on a spread sample of cells.
+    let n_samples = args.uncertainty_samples.min(cells.len());
+    let samples: Vec<(Cell, usize)> = interleaved(cells.len())
+        .take(n_samples)
+        .map(|i| (cells[i], index[i]))
+        .collect();
+    let step = if xs.n > 1 {
+        xs.step().abs()
+    } else {
+        1e-2 * (xlo.abs().max(1.0))
+    };
+    let epsilons: Vec<f64> = (0..5).map(|j| step / 4f64.powi(j)).collect();
+    let unc: Vec<Uncertain> = if samples.is_empty() {
+        Vec::new()
+    } else {
+        let mut bar = Progress::new(1.0, "uncertainty exponent".to_string());
+        let r = uncertainty(
+            &model,
+            phase,
+            co,
+            &attractors,
+            &samples,
+            &epsilons,
+            plate_x,
+            threads,
+            |n, total| {
+                bar.set(n as f64 / total as f64);
+                Ok::<(), CliError>(())
+            },
+        )??;
+        bar.finish();
+        r
+    };
+    let alpha = uncertainty_exponent(&unc);
+    let wall = start.elapsed().as_secs_f64();
+
+    let total = cells.len().max(1) as f64;
+    let summary = Summary {
+        omega: model.omega(),
+        velocity: model.velocity(),
+        phase,
+        zeta: model.params.zeta(),
+        restitution: model.restitution(),
+        x_range: xs.to_string(),
+        v_range: vs.to_string(),
+        plate_x,
+        points: grid.len(),
+        computed,
+        resumed,
+        failed: failed.len(),
+        threads: threads.get(),
+        wall_time_s: wall,
+        attractors: attractors
+            .iter()
+            .enumerate()
+            .map(|(i, a)| AttractorJson {
+                number: i + 1,
+                label: label(a),
+                across_barrier: a.steady.across,
+                at_rest_in_second_well: a.steady.at_rest,
+                period: a.steady.period,
+                chaotic: a.steady.chaotic,
+                final_well: a.steady.well.map(|w| w.number()),
+                anchor: a.anchor,
+                cells: a.cells,
+                fraction: a.cells as f64 / total,
+            })
+            .collect(),
+        uncertainty: unc
+            .iter()
+            .map(|u| UncertainJson {
+                epsilon: u.epsilon,
+                samples: u.samples,
+                uncertain: u.uncertain,
+                fraction: u.fraction(),
+            })
+            .collect(),
+        uncertainty_exponent: alpha,
+        boundary_dimension: alpha.map(|a| 2.0 - a),
+        out: args.out.clone(),
+        plot: args.plot.clone(),
+    };
+    if let Some(path) = &args.plot {
+        plot::png(path, (1500, 1000), |root| {
+            draw(root, &summary, xs, vs, &cells, &index, &attractors)
+        })?;
+    }
+    if args.common.json() {
+        print_json(&summary)?;
+    } else {
+        print_text(&human(&summary))?;
+    }
+    if !failed.is_empty() {
+        return Err(CliError::Failed(format!(
+            "{} of {} starts failed (listed above); the others are saved",
+            failed.len(),
+            todo.len()
+        )));
+    }
+    Ok(())
+}
+
+fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
+    let o = &c.outcome;
+    [
+        Field::F(c.x0),
+        Field::F(c.v0),
+        Field::F(m.omega()),
+        Field::F(m.velocity()),
+        Field::F(phase),
+        Field::F(m.params.zeta()),
+        Field::F(m.restitution()),
+        Field::S(o.class.name()),
+        o.period.map_or(Field::Empty, |p| Field::I(u64::from(p))),
+        Field::flag(o.chaotic),
+        o.final_well
+            .map_or(Field::Empty, |w| Field::I(u64::from(w.number()))),
+        c.anchor.map_or(Field::Empty, |a| Field::F(a[0])),
+        c.anchor.map_or(Field::Empty, |a| Field::F(a[1])),
+        Field::flag(c.at_rest),
+        Field::F(c.periods_simulated),
+    ]
+}
+
+/// The cells already in `path` (none if it does not exist); drops an incomplete last line;
+/// refuses a file with another header or another Ω, V, phase, ζ or e.
+fn read_existing(path: &Path, model: &Model, phase: f64) -> Result<Vec<Cell>, CliError> {
+    let file = match std::fs::File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
+        Err(e) => return Err(CliError::io("cannot read", path, e)),
+    };
+    let bad = |rule: String| CliError::invalid_text("--out", path.display(), rule);
+    let mut reader = BufReader::new(file);
+    let (mut line, mut cells, mut first, mut complete) = (String::new(), Vec::new(), true, 0u64);
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|e| CliError::io("cannot read", path, e))?;
+        if n == 0 || !line.ends_with('\n') {
+            break;
+        }
+        let text = line.trim_end();
+        if first {
+            first = false;
+            if text != COLUMNS.join(",") {
+                return Err(bad(format!(
+                    "is not a basins file (its header is not {})",
+                    COLUMNS.join(",")
+                )));
+            }
+        } else if !text.is_empty() {
+            let c = parse_row(text, model, phase)
+                .map_err(|e| bad(format!("has a bad row {}: {e}", cells.len() + 2)))?;
+            cells.push(c);
+        }
+        complete += n as u64;
+    }
+    if first && complete == 0 {
+        CsvFile::create(path, &COLUMNS.join(","))?.finish()?;
+        return Ok(cells);
+    }
+    let actual = std::fs::metadata(path)
+        .map_err(|e| CliError::io("cannot read", path, e))?
+        .len();
+    if actual > complete {
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| CliError::io("cannot open", path, e))?;
+        f.set_len(complete)
+            .map_err(|e| CliError::io("cannot truncate", path, e))?;
+    }
+    Ok(cells)
+}
+
+fn parse_row(text: &str, model: &Model, phase: f64) -> Result<Cell, String> {
+    let f: Vec<&str> = text.split(',').collect();
+    if f.len() != COLUMNS.len() {
+        return Err(format!("{} fields, expected {}", f.len(), COLUMNS.len()));
+    }
+    let num = |i: usize| -> Result<f64, String> {
+        f[i].parse::<f64>()
+            .map_err(|_| format!("bad {} '{}'", COLUMNS[i], f[i]))
+    };
+    let opt = |i: usize| -> Result<Option<f64>, String> {
+        if f[i].is_empty() {
+            Ok(None)
+        } else {
+            num(i).map(Some)
+        }
+    };
+    let here = [
+        model.omega(),
+        model.velocity(),
+        phase,
+        model.params.zeta(),
+        model.restitution(),
+    ];
+    for (k, want) in here.iter().enumerate() {
+        if num(2 + k)? != *want {
+            return Err(format!(
+                "it holds {} = {}, this run has {want}; use another file",
+                COLUMNS[2 + k],
+                f[2 + k]
+            ));
+        }
+    }
+    let class = match f[7] {
+        "intrawell" => ResponseClass::Intrawell,
+        "transient_interwell" => ResponseClass::TransientInterwell,
+        "continuous_interwell" => ResponseClass::ContinuousInterwell,
+        other => return Err(format!("bad class '{other}'")),
+    };
+    let well = match f[10] {
+        "" => None,
+        "1" => Some(Well::One),
+        "2" => Some(Well::Two),
+        other => return Err(format!("bad final_well '{other}'")),
+    };
+    let anchor = match (opt(11)?, opt(12)?) {
+        (Some(a), Some(b)) => Some([a, b]),
+        _ => None,
+    };
+    Ok(Cell {
+        x0: num(0)?,
+        v0: num(1)?,
+        outcome: Outcome {
+            class,
+            period: opt(8)?.map(|p| p as u32),
+            chaotic: f[9] == "true",
+            final_well: well,
+        },
+        anchor,
+        at_rest: f[13] == "true",
+        periods_simulated: num(14)?,
+    })
+}
+
+fn human(s: &Summary) -> String {
+    let mut t = format!(
+        "basins at Ω = {}, V = {}, phase {} (ζ = {}, e = {}): x0 {} × x0' {}, {} starts, {} \
+         computed, {} resumed, {} failed; {:.1} s on {} threads\n",
+        s.omega,
+        s.velocity,
+        s.phase,
+        s.zeta,
+        s.restitution,
+        s.x_range,
+        s.v_range,
+        s.points,
+        s.computed,
+        s.resumed,
+        s.failed,
+        s.wall_time_s,
+        s.threads
+    );
+    for a in s.attractors.iter().take(20) {
+        t.push_str(&format!(
+            "  #{:<2} {:>6.2}%  {}\n",
+            a.number,
+            100.0 * a.fraction,
+            a.label
+        ));
+    }
+    if s.attractors.len() > 20 {
+        t.push_str(&format!(
+            "  … {} more (see --json)\n",
+            s.attractors.len() - 20
+        ));
+    }
+    for u in &s.uncertainty {
+        t.push_str(&format!(
+            "  ε = {:.3e}: {} of {} starts uncertain ({:.3})\n",
+            u.epsilon, u.uncertain, u.samples, u.fraction
+        ));
+    }
+    if let Some(a) = s.uncertainty_exponent {
+        t.push_str(&format!(
+            "uncertainty exponent α = {a:.3} (boundary dimension {:.3})\n",
+            2.0 - a
+        ));
+    }
+    t
+}
+
+const PALETTE: [RGBColor; 10] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(127, 127, 127),
+    RGBColor(188, 189, 34),
+    RGBColor(23, 190, 207),
+];
+
+fn colour(i: usize) -> RGBColor {
+    PALETTE[i % PALETTE.len()]
+}
+
+fn draw(
+    root: &Area<'_>,
+    s: &Summary,
+    xs: Range,
+    vs: Range,
+    cells: &[Cell],
+    index: &[usize],
+    attractors: &[Attractor],
+) -> DrawResult {
+    let area = header(
+        root,
+        &format!(
+            "Basins of attraction — Ω = {}, V = {}, plate phase {} cycles",
+            s.omega, s.velocity, s.phase
+        ),
+        &format!(
+            "ζ = {}, e = {}; {} × {} starts (x0, x0') at τ = 0; {}",
+            s.zeta,
+            s.restitution,
+            xs.n,
+            vs.n,
+            match s.uncertainty_exponent {
+                Some(a) => format!("uncertainty exponent α = {a:.3}"),
+                None => "uncertainty exponent: not measured".into(),
+            }
+        ),
+        &[],
+    )?;
+    let (w, _) = area.dim_in_pixel();
+    let (left, right) = area.split_horizontally(w - 420);
+    let pad = |r: Range| {
+        let (lo, hi) = r.bounds();
+        let h = if r.n > 1 {
+            0.5 * r.step().abs()
+        } else {
+            0.01 * lo.abs().max(1.0)
+        };
+        (lo - h, hi + h)
+    };
+    let (xr, vr) = (pad(xs), pad(vs));
+    let mut chart = plot::chart(
+        &left,
+        xr,
+        vr,
+        "start position x0 (units of Δx)",
+        "start velocity x0' (units of ω0·Δx)",
+        None,
+    )?;
+    let (hx, hv) = (
+        0.5 * (xr.1 - xr.0) / xs.n as f64,
+        0.5 * (vr.1 - vr.0) / vs.n as f64,
+    );
+    chart.draw_series(cells.iter().zip(index).map(|(c, &i)| {
+        Rectangle::new(
+            [(c.x0 - hx, c.v0 - hv), (c.x0 + hx, c.v0 + hv)],
+            colour(i).filled(),
+        )
+    }))?;
+    // Legend: attractors with their basin fractions.
+    let text = |size| (FONT, size).into_font().color(&BLACK);
+    let mut y = 40;
+    right.draw(&Text::new(
+        "Attractors (basin share)",
+        (12, y),
+        plot::left(text(20)),
+    ))?;
+    y += 36;
+    for (i, a) in s.attractors.iter().enumerate().take(24) {
+        right.draw(&Rectangle::new(
+            [(14, y - 11), (36, y + 11)],
+            colour(i).filled(),
+        ))?;
+        right.draw(&Text::new(
+            format!("#{} {:.1}%", a.number, 100.0 * a.fraction),
+            (46, y - 1),
+            plot::left(text(15)),
+        ))?;
+        right.draw(&Text::new(
+            a.label.clone(),
+            (46, y + 17),
+            plot::left(text(12).color(&RGBColor(70, 70, 70))),
+        ))?;
+        y += 46;
+    }
+    if attractors.len() > 24 {
+        right.draw(&Text::new(
+            format!("… {} more", attractors.len() - 24),
+            (14, y),
+            plot::left(text(14)),
+        ))?;
+        y += 30;
+    }
+    if !s.uncertainty.is_empty() {
+        y += 10;
+        right.draw(&Text::new(
+            "ε-uncertain fraction f(ε)",
+            (12, y),
+            plot::left(text(16)),
+        ))?;
+        y += 24;
+        for u in &s.uncertainty {
+            right.draw(&Text::new(
+                format!("ε = {:.2e}: {:.3}", u.epsilon, u.fraction),
+                (14, y),
+                plot::left(text(13)),
+            ))?;
+            y += 20;
+        }
+    }
+    Ok(())
+}

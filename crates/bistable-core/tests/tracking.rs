@@ -1,0 +1,82 @@
+//! Measuring the transient growth alongside a classification (variational equations,
+//! `classify_from` with `Tracking`) never changes the trajectory: every field of the
+//! classification but the measured ones is bit-identical to a plain run, with sticking
+//! (the variation is reseeded without restarting a step), chaos, rest and periodic orbits.
+
+use bistable_core::{
+    classify, classify_from, ClassifyOptions, Params, Sinusoid, SolverOptions, Tracking,
+};
+
+#[test]
+fn tracking_leaves_the_classification_unchanged() {
+    let co = ClassifyOptions {
+        lyapunov_periods: 300,
+        ..ClassifyOptions::default()
+    };
+    // Chatter and sticking at low Ω; a period-4 orbit; rest in well 2; the paper's sensitive
+    // point; chaos (a shorter run keeps the test fast).
+    for (w, v, periods) in [
+        (0.3, 0.05, 20_000.0),
+        (0.2, 0.05, 20_000.0),
+        (0.85, 0.11, 20_000.0),
+        (0.85, 0.15, 20_000.0),
+        (0.85, 0.13, 20_000.0),
+        (2.45, 0.07, 3_000.0),
+    ] {
+        let plate = Sinusoid::new(w, v).unwrap();
+        let co = ClassifyOptions {
+            max_natural_periods: periods,
+            ..co
+        };
+        let plain = classify(Params::paper(), plate, SolverOptions::default(), co).unwrap();
+        for track in [
+            Tracking {
+                efoldings_cap: Some(20.0),
+                track_periods: 0,
+                extra_windows: 2,
+                no_lyapunov: false,
+            },
+            Tracking {
+                efoldings_cap: Some(700.0),
+                track_periods: 500,
+                extra_windows: 0,
+                no_lyapunov: false,
+            },
+        ] {
+            let t = classify_from(
+                Params::paper(),
+                plate,
+                SolverOptions::default(),
+                co,
+                (0.0, 0.0),
+                track,
+            )
+            .unwrap();
+            assert!(t.transient_efoldings.is_some(), "({w}, {v})");
+            let strip = |mut c: bistable_core::Classification| {
+                c.transient_efoldings = None;
+                c.chaos_votes = None;
+                c
+            };
+            assert_eq!(strip(t), strip(plain), "({w}, {v}) {track:?}");
+        }
+        if plain.period.is_none() {
+            let t = classify_from(
+                Params::paper(),
+                plate,
+                SolverOptions::default(),
+                co,
+                (0.0, 0.0),
+                Tracking {
+                    extra_windows: 3,
+                    efoldings_cap: Some(20.0),
+                    ..Tracking::default()
+                },
+            )
+            .unwrap();
+            let (chaotic, n) = t.chaos_votes.unwrap();
+            assert_eq!(n, 3);
+            assert!(chaotic <= n);
+        }
+    }
+}

@@ -1,0 +1,163 @@
+//! `bistable_impact.sweep.basins`: the cells of a basin grid, classified by
+//! `bistable_analysis::basins` exactly as `bistable basins` does, and the attractors they reach.
+
+use pyo3::prelude::*;
+use pyo3::types::{PyDict, PyList};
+
+use bistable_analysis::basins::{basin_cell, identify, plate_at, Cell};
+use bistable_analysis::sensitivity::Outcome;
+use bistable_analysis::Threads;
+use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
+
+use crate::common::{invalid, model, param_err, sim_err};
+
+fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
+    let d = PyDict::new(py);
+    let o = &c.outcome;
+    d.set_item("x0", c.x0)?;
+    d.set_item("v0", c.v0)?;
+    d.set_item("class", o.class.name())?;
+    d.set_item("period", o.period)?;
+    d.set_item("chaotic", o.chaotic)?;
+    d.set_item("final_well", o.final_well.map(|w| w.number()))?;
+    d.set_item("anchor_x", c.anchor.map(|a| a[0]))?;
+    d.set_item("anchor_v", c.anchor.map(|a| a[1]))?;
+    d.set_item("at_rest_in_second_well", c.at_rest)?;
+    d.set_item("periods_simulated", c.periods_simulated)?;
+    Ok(d)
+}
+
+/// Classifies the starts `(x0, v0)` at plate phase `phase` (cycles) on `threads` threads (0:
+/// all cores); one dict per start, in order (the `bistable basins` CSV columns without the
+/// model's). With `check_only` only the arguments and the starts are checked (an empty list).
+#[pyfunction]
+#[pyo3(signature = (omega, velocity, phase, starts, zeta=0.02, restitution=0.85, tol=1e-16,
+    chatter="accumulation", max_periods=2000.0, lyapunov_periods=300, threads=0,
+    check_only=false))]
+#[allow(clippy::too_many_arguments)]
+pub fn basin_cells<'py>(
+    py: Python<'py>,
+    omega: f64,
+    velocity: f64,
+    phase: f64,
+    starts: Vec<(f64, f64)>,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+    max_periods: f64,
+    lyapunov_periods: u32,
+    threads: usize,
+    check_only: bool,
+) -> PyResult<Bound<'py, PyList>> {
+    let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
+    let (plate_x, _) = plate_at(&m, phase).map_err(|e| param_err(py, &e))?;
+    for &(x0, _) in &starts {
+        if x0.is_nan() || x0 < plate_x {
+            return Err(invalid(
+                py,
+                "starts",
+                x0,
+                &format!("x0 must not be below the plate (z = {plate_x} at this phase)"),
+            ));
+        }
+    }
+    let co = ClassifyOptions {
+        max_natural_periods: max_periods,
+        lyapunov_periods,
+        ..ClassifyOptions::default()
+    }
+    .check()
+    .map_err(|e| param_err(py, &e))?;
+    let threads = if threads == 0 {
+        Threads::all()
+    } else {
+        Threads::new(threads).ok_or_else(|| invalid(py, "threads", 0.0, "must be >= 1"))?
+    };
+    if check_only {
+        return Ok(PyList::empty(py));
+    }
+    let cells: Result<Vec<Cell>, SimError> = py.allow_threads(|| {
+        bistable_analysis::parallel::map(
+            &starts,
+            threads,
+            |&(x0, v0)| basin_cell(&m, phase, x0, v0, co),
+            |_| Ok::<(), ()>(()),
+        )
+        .expect("no cancellation")
+        .into_iter()
+        .collect()
+    });
+    let cells = cells.map_err(|e| sim_err(py, &e))?;
+    let out = PyList::empty(py);
+    for c in &cells {
+        out.append(cell_dict(py, c)?)?;
+    }
+    Ok(out)
+}
+
+fn cell_from(d: &Bound<'_, PyDict>) -> PyResult<Cell> {
+    let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+        d.get_item(k)?
+            .ok_or_else(|| pyo3::exceptions::PyKeyError::new_err(k.to_string()))
+    };
+    let class = match get("class")?.extract::<String>()?.as_str() {
+        "intrawell" => ResponseClass::Intrawell,
+        "transient_interwell" => ResponseClass::TransientInterwell,
+        "continuous_interwell" => ResponseClass::ContinuousInterwell,
+        other => {
+            return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                "bad class {other:?}"
+            )))
+        }
+    };
+    let well: Option<u8> = get("final_well")?.extract()?;
+    let ax: Option<f64> = get("anchor_x")?.extract()?;
+    let av: Option<f64> = get("anchor_v")?.extract()?;
+    Ok(Cell {
+        x0: get("x0")?.extract()?,
+        v0: get("v0")?.extract()?,
+        outcome: Outcome {
+            class,
+            period: get("period")?.extract()?,
+            chaotic: get("chaotic")?.extract()?,
+            final_well: well.map(|w| if w == 2 { Well::Two } else { Well::One }),
+        },
+        anchor: ax.zip(av).map(|(a, b)| [a, b]),
+        at_rest: get("at_rest_in_second_well")?.extract()?,
+        periods_simulated: get("periods_simulated")?.extract()?,
+    })
+}
+
+/// The attractors reached by `cells` (dicts of [`basin_cells`]), largest basin first, as
+/// dicts (`number`, `label`, `across_barrier`, `at_rest_in_second_well`, `period`, `chaotic`,
+/// `final_well`, `anchor`, `cells`, `fraction`), and each cell's attractor number (from 1).
+#[pyfunction]
+pub fn basin_attractors<'py>(
+    py: Python<'py>,
+    cells: Vec<Bound<'py, PyDict>>,
+) -> PyResult<(Bound<'py, PyList>, Vec<usize>)> {
+    let cells: Vec<Cell> = cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let (attractors, index) = identify(&cells);
+    let total = cells.len().max(1) as f64;
+    let out = PyList::empty(py);
+    for (i, a) in attractors.iter().enumerate() {
+        let d = PyDict::new(py);
+        let mut label = a.steady.label();
+        if let Some(x) = a.anchor {
+            label.push_str(&format!(" (x = {:.4}, x' = {:.4})", x[0], x[1]));
+        }
+        d.set_item("number", i + 1)?;
+        d.set_item("label", label)?;
+        d.set_item("across_barrier", a.steady.across)?;
+        d.set_item("at_rest_in_second_well", a.steady.at_rest)?;
+        d.set_item("period", a.steady.period)?;
+        d.set_item("chaotic", a.steady.chaotic)?;
+        d.set_item("final_well", a.steady.well.map(|w| w.number()))?;
+        d.set_item("anchor", a.anchor.map(|x| x.to_vec()))?;
+        d.set_item("cells", a.cells)?;
+        d.set_item("fraction", a.cells as f64 / total)?;
+        out.append(d)?;
+    }
+    Ok((out, index.into_iter().map(|i| i + 1).collect()))
+}
