@@ -171,3 +171,22 @@ class Simulator:
         """Restores a simulator; ``ValueError`` for bytes that are not a valid checkpoint."""
         ...
     def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
+
+def basin_cells(
+    omega: float,
+    velocity: float,
+    phase: float,
+    starts: List[Tuple[float, float]],
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 2000.0,
+    lyapunov_periods: int = 300,
+    threads: int = 0,
+    check_only: bool = False,
+) -> List[Dict[str, Any]]: ...
+
+def basin_attractors(
+    cells: List[Dict[str, Any]],
+) -> Tuple[List[Dict[str, Any]], List[int]]: ...
