@@ -11,7 +11,7 @@
   (``summary['wall_time_s']``).
 
     .venv/bin/python bench/python_map.py [--omega-range A:B:N] [--velocity-range A:B:N]
-        [--rounds R] [--calls N]
+        [--rounds R] [--calls N] [--methods cli,dask,local]
 
 Prints a Markdown report (machine, load, command, tables) on stdout.
 """
@@ -85,7 +85,10 @@ def main() -> int:
     p.add_argument("--calls", type=int, default=2000)
     p.add_argument("--chunk", type=int, default=16)
     p.add_argument("--no-map", action="store_true", help="only the simulate() overhead")
+    p.add_argument("--methods", default="cli,dask,local",
+                   help="which maps to time (comma-separated; cli is always run, as reference)")
     a = p.parse_args()
+    methods = ["cli"] + [m for m in ("dask", "local") if m in a.methods.split(",")]
     from distributed import Client, LocalCluster
 
     w, v = grid(a.omega_range), grid(a.velocity_range)
@@ -104,7 +107,7 @@ def main() -> int:
     mismatches = 0
     try:
         for r in range(rounds):
-            order = ["cli", "dask", "local"] if r % 2 == 0 else ["local", "dask", "cli"]
+            order = methods if r % 2 == 0 else methods[::-1]
             for what in order:
                 if what == "cli":
                     wall, used = run_cli(a.omega_range, a.velocity_range, ref_path)
@@ -152,7 +155,7 @@ def main() -> int:
     print(f"- load average (1 min) {load0[0]:.2f} before, {load1[0]:.2f} after")
     print(f"- command: `.venv/bin/python bench/python_map.py --omega-range {a.omega_range} "
           f"--velocity-range {a.velocity_range} --rounds {a.rounds} --calls {a.calls}"
-          f"{' --no-map' if a.no_map else ''}`\n")
+          f" --methods {','.join(methods)}{' --no-map' if a.no_map else ''}`\n")
     if a.no_map:
         print_simulate(a.calls, calls, inside)
         return 0
@@ -168,7 +171,7 @@ def main() -> int:
         "dask": f"`sweep.map(client=...)`, LocalCluster 2 processes × 1 thread, chunk {a.chunk}",
         "local": "`sweep.map(threads=2)` (Rust threads in-process)",
     }
-    for k in ("cli", "dask", "local"):
+    for k in methods:
         best = min(times[k])
         least = min(cpu[k])
         print(f"| {names[k]} | {', '.join(f'{x:.2f}' for x in times[k])} | {best:.2f} | "
