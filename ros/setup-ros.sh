@@ -19,7 +19,8 @@ fi
 
 build=$root/target/ros
 inputs=$(cat ros/requirements-ros.txt ros/bistable_impact_msgs/package.xml \
-  ros/bistable_impact_msgs/CMakeLists.txt ros/bistable_impact_msgs/msg/*.msg | sha256sum | cut -c1-16)
+  ros/bistable_impact_msgs/CMakeLists.txt ros/bistable_impact_msgs/msg/*.msg \
+  ros/bistable_impact_msgs/srv/*.srv | sha256sum | cut -c1-16)
 if [ "$(cat "$build/install/.stamp" 2>/dev/null)" != "$inputs" ]; then
   echo "setup-ros: building bistable_impact_msgs with rosidl"
   rm -rf "$build"
