@@ -1,12 +1,13 @@
 //! `bistable_impact_node`: the bistable impact oscillator as a ROS 2 node (see `ros/README.md`).
 
 use std::collections::{BTreeSet, VecDeque};
+use std::net::Ipv4Addr;
 use std::process::ExitCode;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
-use bistable_impact_node::args::{self, Config, Parsed};
+use bistable_impact_node::args::{self, Config, DiscoveryRange, Parsed};
 use bistable_impact_node::control::{Control, StepJob};
 use bistable_impact_node::inbox::{take_commands, Taken, Throttle, MAX_COMMANDS_PER_CALL};
 use bistable_impact_node::msg::{
@@ -19,7 +20,8 @@ use bistable_impact_node::params::{Settings, MAX_HISTORY_DEPTH, SPECS};
 use bistable_impact_node::paramsrv::{self, USE_SIM_TIME, USE_SIM_TIME_REFUSED};
 use bistable_impact_node::sim::{Outcome, Runner};
 use ros2_client::dds::rustdds::{
-    DomainParticipantStatusEvent, DomainParticipantStatusListener, StatusEvented, GUID,
+    DomainParticipantBuilder, DomainParticipantStatusEvent, DomainParticipantStatusListener,
+    StatusEvented, GUID,
 };
 use ros2_client::log::LogLevel;
 use ros2_client::parameters::{raw, Parameter};
@@ -33,8 +35,8 @@ use ros2_client::rcl_interfaces::{
 use ros2_client::rosout::{NodeLoggingHandle, RosoutRaw};
 use ros2_client::service::RmwRequestId;
 use ros2_client::{
-    Context, ContextOptions, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue,
-    Publisher, QosProfile, Server, ServiceMapping, ServiceTypeName, Subscription, WriteError,
+    Context, MessageTypeName, Name, Node, NodeName, NodeOptions, ParameterValue, Publisher,
+    QosProfile, Server, ServiceMapping, ServiceTypeName, Subscription, WriteError,
 };
 
 /// QoS of `/bistable/mass_state` and `/clock`: reliable (matches reliable and best-effort
@@ -683,11 +685,19 @@ fn main() -> ExitCode {
             }
             ExitCode::SUCCESS
         }
-        Ok(Parsed::Run(cfg)) => match run(*cfg) {
+        Ok(Parsed::Run(cfg)) => match args::discovery_range(
+            std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
+                .ok()
+                .as_deref(),
+            std::env::var("ROS_LOCALHOST_ONLY").ok().as_deref(),
+        )
+        .map_err(|e| (e, ExitCode::from(2)))
+        .and_then(|range| run(*cfg, range).map_err(|e| (e, ExitCode::FAILURE)))
+        {
             Ok(()) => ExitCode::SUCCESS,
-            Err(e) => {
+            Err((e, code)) => {
                 eprintln!("[FATAL] [bistable_impact]: {e}");
-                ExitCode::FAILURE
+                code
             }
         },
         Err(e) => {
@@ -772,7 +782,7 @@ fn services(node: &mut Node, names: &Names, fully_qualified: &str) -> Result<Ser
     })
 }
 
-fn run(cfg: Config) -> Result<(), String> {
+fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
     let stop = Arc::new(AtomicBool::new(false));
     {
         let stop = Arc::clone(&stop);
@@ -780,7 +790,16 @@ fn run(cfg: Config) -> Result<(), String> {
             .map_err(|e| format!("cannot install the signal handler: {e}"))?;
     }
     let runner = Runner::new(&cfg.settings)?;
-    let context = Context::with_options(ContextOptions::new().domain_id(cfg.domain_id))
+    let env = |name: &str| std::env::var(name).ok();
+    let mut participant = DomainParticipantBuilder::new(cfg.domain_id);
+    if range == DiscoveryRange::Localhost {
+        // As rmw does for LOCALHOST: only the loopback interface is used and announced.
+        participant = participant.with_only_networks([Ipv4Addr::LOCALHOST]);
+    }
+    let context = participant
+        .build()
+        .map_err(|e| e.to_string())
+        .and_then(|dp| Context::from_domain_participant(dp).map_err(|e| e.to_string()))
         .map_err(|e| format!("cannot join DDS domain {}: {e}", cfg.domain_id))?;
     let names = &cfg.names;
     let node_name = NodeName::new(names.namespace(), names.node())
@@ -877,6 +896,24 @@ fn run(cfg: Config) -> Result<(), String> {
         LogLevel::Info,
         &format!("services: {}", resolved(&SERVICES, Kind::Service)),
     );
+    log.log(
+        LogLevel::Info,
+        &format!(
+            "DDS discovery range {}",
+            match range {
+                DiscoveryRange::Localhost => "LOCALHOST (loopback only)",
+                DiscoveryRange::Subnet => "SUBNET",
+                DiscoveryRange::SystemDefault => "SYSTEM_DEFAULT",
+            }
+        ),
+    );
+    if env("ROS_STATIC_PEERS").is_some_and(|p| !p.trim().is_empty()) {
+        log.log(
+            LogLevel::Warn,
+            "ROS_STATIC_PEERS ignored: RustDDS takes no initial peer list (peers are found by \
+             multicast discovery only)",
+        );
+    }
     for w in &cfg.warnings {
         log.log(LogLevel::Warn, w);
     }
