@@ -235,6 +235,18 @@ struct LoopState {
     reset_tick: bool,
     /// Wall-clock instant the current paced tick was due, for its lateness.
     last_due: Option<Instant>,
+    /// Log lines about service requests, limited as those about commands.
+    request_log: Throttle,
+}
+
+impl LoopState {
+    /// Logs a line about a service request unless over the budget (then it is counted and
+    /// summarised once a second).
+    fn log_throttled(&mut self, log: &Logger, level: LogLevel, msg: &str) {
+        if self.request_log.allow(Instant::now()) {
+            log.log(level, msg);
+        }
+    }
 }
 
 /// The node's service servers (parameter services of `rcl_interfaces` and the control
@@ -261,6 +273,8 @@ struct Inbox<'a> {
     services: &'a Services,
     throttle: Throttle,
     diagnostics: DiagnosticsClock,
+    /// When the service requests are polled next.
+    next_service_poll: Instant,
 }
 
 /// When the next `/diagnostics` report is due and what the last one saw.
@@ -343,7 +357,25 @@ impl Inbox<'_> {
                 ),
             );
         }
+        // The services at most once per POLL: the loop calls this between all its steps,
+        // far more often when it runs as fast as possible.
+        let now = Instant::now();
+        if now < self.next_service_poll {
+            return false;
+        }
+        self.next_service_poll = now + POLL;
         let repaced = self.serve_parameters(st, log) | self.serve_control(st, log);
+        if let Some((k, window)) = st.request_log.flush(now) {
+            log.log(
+                LogLevel::Warn,
+                &format!(
+                    "{k} more service request messages in the last {:.1} s not logged (at most \
+                     {COMMAND_LOG_BUDGET} a second; so far {} requests refused)",
+                    window.as_secs_f64(),
+                    st.n.requests_refused
+                ),
+            );
+        }
         self.publish_diagnostics(st, log);
         repaced
     }
@@ -411,7 +443,11 @@ impl Inbox<'_> {
                 let result = match checked {
                     Err(why) => {
                         st.n.requests_refused += 1;
-                        log.log(LogLevel::Warn, &format!("refused parameters: {why}"));
+                        st.log_throttled(
+                            log,
+                            LogLevel::Warn,
+                            &format!("refused parameters: {why}"),
+                        );
                         Err(why)
                     }
                     Ok(()) => params.into_iter().try_for_each(|p| {
@@ -460,10 +496,8 @@ impl Inbox<'_> {
             let halted = st.runner.halted().map(str::to_owned);
             match st.control.start_step(id, req.ticks, halted.as_deref()) {
                 Ok(()) => {
-                    log.log(
-                        LogLevel::Info,
-                        &format!("step of {} ticks from t = {} s", req.ticks, st.runner.now()),
-                    );
+                    let msg = format!("step of {} ticks from t = {} s", req.ticks, st.runner.now());
+                    st.log_throttled(log, LogLevel::Info, &msg);
                     None
                 }
                 Err(message) => {
@@ -555,10 +589,11 @@ impl Inbox<'_> {
 /// Logs a control request's outcome (refusals are counted).
 fn log_request(st: &mut LoopState, log: &Logger, what: &str, success: bool, message: &str) {
     if success {
-        log.log(LogLevel::Info, &format!("{what}: {message}"));
+        st.log_throttled(log, LogLevel::Info, &format!("{what}: {message}"));
     } else {
         st.n.requests_refused += 1;
-        log.log(
+        st.log_throttled(
+            log,
             LogLevel::Warn,
             &format!("refused {what} request: {message}"),
         );
@@ -596,7 +631,11 @@ fn set_parameter(
         .and_then(|()| apply_parameter(st, name, value, log));
     if let Err(why) = &result {
         st.n.requests_refused += 1;
-        log.log(LogLevel::Warn, &format!("refused parameter {name}: {why}"));
+        st.log_throttled(
+            log,
+            LogLevel::Warn,
+            &format!("refused parameter {name}: {why}"),
+        );
     }
     result
 }
@@ -933,6 +972,7 @@ fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
         impacts: VecDeque::new(),
         reset_tick: false,
         last_due: None,
+        request_log: Throttle::new(COMMAND_LOG_BUDGET, Duration::from_secs(1), Instant::now()),
     };
     let mut fresh = Vec::new();
     let now = Instant::now();
@@ -945,6 +985,7 @@ fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
             last_wall: now,
             last_advanced: 0.0,
         },
+        next_service_poll: now,
     };
     let mut impact_readers = MatchedReaders::new(impact_pub.guid());
     let mut last_outcome = Outcome::Tick;
