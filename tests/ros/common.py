@@ -88,7 +88,7 @@ class NodeProcess:
 SUMMARY = re.compile(r"stopping at t = (?P<t>\S+) s: (?P<located>\d+) impacts located, (?P<published>\d+) published "
                      r"\((?P<failed>\d+) failed\), (?P<states>\d+) states published \((?P<dropped>\d+) dropped\), "
                      r"(?P<accepted>\d+) commands accepted, (?P<refused>\d+) refused, (?P<dropped_when_due>\d+) dropped when due; "
-                     r"(?P<requests_refused>\d+) requests refused, (?P<resets>\d+) resets; "
+                     r"(?:(?P<requests_refused>\d+) requests refused, (?P<resets>\d+) resets; )?"
                      r"(?P<paced_ticks>\d+) paced ticks, lateness max (?P<max_lateness_ms>\S+) ms, (?P<late_ticks>\d+) over 10 ms")
 
 
@@ -96,7 +96,7 @@ def summary(log):
     """The node's shutdown summary as numbers (t in s, counts as ints)."""
     m = SUMMARY.search(log)
     assert m, log[-3000:]
-    return {k: (float(v) if k in ("t", "max_lateness_ms") else int(v)) for k, v in m.groupdict().items()}
+    return {k: (float(v) if k in ("t", "max_lateness_ms") else int(v or 0)) for k, v in m.groupdict().items()}
 
 
 def rss_kib(pid, field="VmRSS"):

@@ -990,8 +990,15 @@ fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
     let mut impact_readers = MatchedReaders::new(impact_pub.guid());
     let mut last_outcome = Outcome::Tick;
     publish_tick(&st.runner, &state_pub, &clock_pub, &mut st.n, &log);
+    let mut next_status_poll = Instant::now();
     while !stop.load(Ordering::Relaxed) {
-        impact_readers.update(&status);
+        // The status events are read under the participant's discovery lock: a few times a
+        // second, not at every step of a free-running loop (that starved discovery, so that
+        // departed subscribers stayed matched and held up the reliable writers).
+        if Instant::now() >= next_status_poll {
+            impact_readers.update(&status);
+            next_status_poll = Instant::now() + STATUS_POLL;
+        }
         inbox.serve(&mut st, &log);
         if std::mem::take(&mut st.reset_tick) {
             publish_tick(&st.runner, &state_pub, &clock_pub, &mut st.n, &log);
@@ -1169,6 +1176,9 @@ impl MatchedReaders {
         self.readers.len()
     }
 }
+
+/// How often the loop reads the participant's status events (matched subscriptions).
+const STATUS_POLL: Duration = Duration::from_millis(100);
 
 /// How long DDS keeps running after the simulation loop ends (with impact subscribers).
 const SHUTDOWN_LINGER: Duration = Duration::from_secs(1);
