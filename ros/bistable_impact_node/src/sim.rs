@@ -148,6 +148,70 @@ impl Runner {
         })
     }
 
+    /// Restarts the simulation at time 0 with the mass at `x` [m] moving at `v` [m/s] (the
+    /// paper's initial condition, `x = v = 0`, when `state` is `None`), the initial shaker
+    /// sinusoid (`Omega`, `V` of `settings`) and the current `zeta`, `e`: impact indices restart
+    /// at 0, queued commands and any ramp or external motion are discarded, ticks restart at 0.
+    /// The last impact of the run before, if held back to learn whether sticking follows it, is
+    /// appended to `impacts` first (its run ended without sticking). Refused, with nothing
+    /// changed, for a non-finite or out-of-range value or a mass below the plate.
+    pub fn reset(
+        &mut self,
+        settings: &Settings,
+        state: Option<(f64, f64)>,
+        impacts: &mut Vec<ImpactEvent>,
+    ) -> Result<String, String> {
+        let (x, v) = state.unwrap_or((0.0, 0.0));
+        for (name, value) in [("x", x), ("v", v)] {
+            if !value.is_finite() {
+                return Err(format!("{name} = {} is not finite", num(value)));
+            }
+        }
+        let xn = x / self.delta_x;
+        let vn = v / (self.omega0 * self.delta_x);
+        if xn.abs() > MAX_NONDIMENSIONAL || vn.abs() > MAX_NONDIMENSIONAL {
+            return Err(format!(
+                "x = {} m or v = {} m/s is out of range (at most {MAX_NONDIMENSIONAL:e} delta_x \
+                 and omega0·delta_x)",
+                num(x),
+                num(v)
+            ));
+        }
+        let params = Params::new(settings.zeta, settings.e).map_err(|e| e.to_string())?;
+        let plate = Sinusoid::new(settings.omega, settings.v).map_err(|e| e.to_string())?;
+        let motion: PlateMotion = plate.into();
+        let z0 = motion.motion(Instant::new(0.0)).0;
+        if xn < z0 {
+            return Err(format!(
+                "x = {} m is below the plate, which is at z = {} m at time 0",
+                num(x),
+                num(self.delta_x * z0)
+            ));
+        }
+        let sim = Simulator::with_state(params, motion, SolverOptions::default(), 0.0, xn, vn)
+            .map_err(|e| e.to_string())?;
+        if let Some(p) = self.pending.take() {
+            impacts.push(self.impact_msg(&p, false));
+        }
+        self.sim = sim;
+        self.tick_origin = 0.0;
+        self.tick_k = 0;
+        self.queue.clear();
+        self.piece_end = None;
+        self.ramp = None;
+        self.centre = plate.origin().2;
+        self.events.clear();
+        self.halted = None;
+        Ok(format!(
+            "simulation reset to t = 0 s, x = {} m, v = {} m/s (shaker Omega = {}, V = {}; \
+             impact indices restart at 0)",
+            num(x),
+            num(v),
+            num(settings.omega),
+            num(settings.v)
+        ))
+    }
+
     /// Current simulation time [s].
     pub fn now(&self) -> f64 {
         self.sim.time() / self.omega0

@@ -427,3 +427,103 @@ fn sinusoid_commands_end_on_the_set_point_about_the_initial_centre() {
     }
     assert!(worst < 1e-14, "{worst:e}");
 }
+
+#[test]
+fn reset_restarts_from_the_requested_state_with_indices_from_0() {
+    let mut r = Runner::new(&settings(1.75, 0.07, 7.0)).unwrap();
+    // A set-point change in the queue and one applied: both are discarded by the reset.
+    r.command(&cmd(ShakerCommand::MODE_SINUSOID, 20.0, 2.5, 0.1, 0.0, 0.0))
+        .unwrap();
+    r.command(&cmd(ShakerCommand::MODE_SINUSOID, 90.0, 2.0, 0.1, 0.0, 0.0))
+        .unwrap();
+    let (before, _) = run_until(&mut r, 50.0);
+    assert!(before.len() > 10);
+    let count = r.impact_count();
+    let mut flushed = Vec::new();
+    let note = r
+        .reset(&settings(1.75, 0.07, 7.0), None, &mut flushed)
+        .unwrap();
+    assert!(note.contains("restart at 0"), "{note}");
+    // The impact held back for its sticking decision belongs to the run before.
+    assert!(flushed.len() <= 1);
+    if let Some(last) = flushed.first() {
+        assert_eq!(last.index, before.last().unwrap().index + 1);
+        assert_eq!(count, last.index + 1);
+    } else {
+        assert_eq!(count, before.last().unwrap().index + 1);
+    }
+    assert_eq!((r.now(), r.impact_count()), (0.0, 0));
+    let st = r.state();
+    assert_eq!((st.x, st.v, st.z, st.t), (0.0, 0.0, 0.0, 0.0));
+    assert_eq!(st.shaker_omega, 1.75);
+    // After the reset: exactly a fresh run from the initial condition (no command applies).
+    let (impacts, ticks) = run_until(&mut r, 120.0);
+    let reference = core_impacts(&mut paper_sim(1.75, 0.07), 120.0);
+    assert!(impacts.len() + 1 >= reference.len() && impacts.len() > 20);
+    for (k, (got, want)) in impacts.iter().zip(&reference).enumerate() {
+        assert_eq!(got.index, k as u64);
+        assert_eq!((got.t, got.x, got.v_after), (want.t, want.x, want.v_after));
+    }
+    assert!((ticks[0] - 1.0 / 7.0).abs() < 1e-15);
+    assert_eq!(
+        r.state().shaker_omega,
+        1.75,
+        "queued commands are discarded"
+    );
+
+    // To a given state, in SI units: the core's run from that state.
+    let s = Settings {
+        omega0: 2.0,
+        delta_x: 0.5,
+        ..settings(1.75, 0.07, 7.0)
+    };
+    let mut r = Runner::new(&s).unwrap();
+    run_until(&mut r, 10.0);
+    r.reset(&s, Some((0.01, -0.05)), &mut Vec::new()).unwrap();
+    let (impacts, _) = run_until(&mut r, 40.0);
+    let plate = Sinusoid::new(1.75, 0.07).unwrap();
+    let mut sim = Simulator::with_state(
+        Params::paper(),
+        plate.into(),
+        SolverOptions::default(),
+        0.0,
+        0.02,
+        -0.05,
+    )
+    .unwrap();
+    let reference = core_impacts(&mut sim, 79.0);
+    assert!(
+        impacts.len() > 5 && impacts.len() + 1 >= reference.len(),
+        "{} {}",
+        impacts.len(),
+        reference.len()
+    );
+    for (k, (got, want)) in impacts.iter().zip(&reference).enumerate() {
+        assert_eq!(got.index, k as u64);
+        assert_eq!((got.t, got.x), (want.t / 2.0, want.x * 0.5));
+    }
+}
+
+#[test]
+fn bad_reset_states_are_refused_and_change_nothing() {
+    let s = settings(1.75, 0.07, 7.0);
+    let mut r = Runner::new(&s).unwrap();
+    run_until(&mut r, 10.0);
+    let (t, count) = (r.now(), r.impact_count());
+    for (x, v, needle) in [
+        (-0.01, 0.0, "below the plate"),
+        (f64::NAN, 0.0, "x = NaN is not finite"),
+        (0.5, f64::INFINITY, "v = inf is not finite"),
+        (2e6, 0.0, "out of range"),
+        (0.5, -3e6, "out of range"),
+    ] {
+        let mut flushed = Vec::new();
+        let why = r.reset(&s, Some((x, v)), &mut flushed).unwrap_err();
+        assert!(why.contains(needle), "{x} {v}: {why}");
+        assert!(flushed.is_empty());
+        assert_eq!((r.now(), r.impact_count()), (t, count));
+    }
+    // The run goes on as if nothing happened.
+    let (more, _) = run_until(&mut r, 30.0);
+    assert!(more.first().is_some_and(|i| i.index + 1 >= count));
+}
