@@ -650,16 +650,7 @@ fn draw(
     )?;
     let (w, _) = area.dim_in_pixel();
     let (left, right) = area.split_horizontally(w - 420);
-    let pad = |r: Range| {
-        let (lo, hi) = r.bounds();
-        let h = if r.n > 1 {
-            0.5 * r.step().abs()
-        } else {
-            0.01 * lo.abs().max(1.0)
-        };
-        (lo - h, hi + h)
-    };
-    let (xr, vr) = (pad(xs), pad(vs));
+    let ((xr, hx), (vr, hv)) = (plot::grid_axis(xs), plot::grid_axis(vs));
     let mut chart = plot::chart(
         &left,
         xr,
@@ -668,10 +659,6 @@ fn draw(
         "start velocity x0' (units of ω0·Δx)",
         None,
     )?;
-    let (hx, hv) = (
-        0.5 * (xr.1 - xr.0) / xs.n as f64,
-        0.5 * (vr.1 - vr.0) / vs.n as f64,
-    );
     chart.draw_series(cells.iter().zip(index).map(|(c, &i)| {
         Rectangle::new(
             [(c.x0 - hx, c.v0 - hv), (c.x0 + hx, c.v0 + hv)],

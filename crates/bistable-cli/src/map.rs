@@ -592,16 +592,7 @@ fn draw_map(
     )?;
     let (w, _) = area.dim_in_pixel();
     let (left, right) = area.split_horizontally(w - 330);
-    let pad = |r: Range| {
-        let (lo, hi) = r.bounds();
-        let h = if r.n > 1 {
-            0.5 * r.step().abs()
-        } else {
-            0.01 * lo.abs().max(1.0)
-        };
-        (lo - h, hi + h)
-    };
-    let (wx, vy) = (pad(omegas), pad(vs));
+    let ((wx, hw), (vy, hv)) = (plot::grid_axis(omegas), plot::grid_axis(vs));
     let mut chart = plot::chart(
         &left,
         wx,
@@ -610,10 +601,6 @@ fn draw_map(
         "shaker velocity amplitude V (units of ω0·Δx)",
         None,
     )?;
-    let (hw, hv) = (
-        0.5 * (wx.1 - wx.0) / omegas.n as f64,
-        0.5 * (vy.1 - vy.0) / vs.n as f64,
-    );
     let mut present: HashMap<Category, usize> = HashMap::new();
     let cells = records
         .iter()

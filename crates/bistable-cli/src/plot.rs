@@ -16,6 +16,20 @@ use bistable_analysis::Model;
 use bistable_core::State;
 
 use crate::error::CliError;
+use crate::ranges::Range;
+
+/// The axis of a grid of cells centred on the values of `r`: the values' span padded by half a
+/// cell (by 1 % of the value for a single value), and the half-width of a cell on that axis.
+pub fn grid_axis(r: Range) -> ((f64, f64), f64) {
+    let (lo, hi) = r.bounds();
+    let h = if r.n > 1 {
+        0.5 * r.step().abs()
+    } else {
+        0.01 * lo.abs().max(1.0)
+    };
+    let axis = (lo - h, hi + h);
+    (axis, 0.5 * (axis.1 - axis.0) / r.n as f64)
+}
 
 const TAU: f64 = std::f64::consts::TAU;
 pub(crate) const FONT: &str = "sans-serif";
