@@ -3,7 +3,6 @@
 //! resumable CSV file, drawn as a PNG, with the attractors and the uncertainty exponent.
 
 use std::collections::HashMap;
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::time::Instant as WallClock;
 
@@ -443,53 +442,13 @@ fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
 /// The cells already in `path` (none if it does not exist); drops an incomplete last line;
 /// refuses a file with another header or another Ω, V, phase, ζ or e.
 fn read_existing(path: &Path, model: &Model, phase: f64) -> Result<Vec<Cell>, CliError> {
-    let file = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(CliError::io("cannot read", path, e)),
-    };
-    let bad = |rule: String| CliError::invalid_text("--out", path.display(), rule);
-    let mut reader = BufReader::new(file);
-    let (mut line, mut cells, mut first, mut complete) = (String::new(), Vec::new(), true, 0u64);
-    loop {
-        line.clear();
-        let n = reader
-            .read_line(&mut line)
-            .map_err(|e| CliError::io("cannot read", path, e))?;
-        if n == 0 || !line.ends_with('\n') {
-            break;
-        }
-        let text = line.trim_end();
-        if first {
-            first = false;
-            if text != COLUMNS.join(",") {
-                return Err(bad(format!(
-                    "is not a basins file (its header is not {})",
-                    COLUMNS.join(",")
-                )));
-            }
-        } else if !text.is_empty() {
-            let c = parse_row(text, model, phase)
-                .map_err(|e| bad(format!("has a bad row {}: {e}", cells.len() + 2)))?;
-            cells.push(c);
-        }
-        complete += n as u64;
-    }
-    if first && complete == 0 {
-        CsvFile::create(path, &COLUMNS.join(","))?.finish()?;
-        return Ok(cells);
-    }
-    let actual = std::fs::metadata(path)
-        .map_err(|e| CliError::io("cannot read", path, e))?
-        .len();
-    if actual > complete {
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
-            .map_err(|e| CliError::io("cannot open", path, e))?;
-        f.set_len(complete)
-            .map_err(|e| CliError::io("cannot truncate", path, e))?;
-    }
+    let mut cells = Vec::new();
+    crate::output::read_resumable(path, &COLUMNS.join(","), "basins", |text| {
+        let c = parse_row(text, model, phase)
+            .map_err(|e| format!("has a bad row {}: {e}", cells.len() + 2))?;
+        cells.push(c);
+        Ok(())
+    })?;
     Ok(cells)
 }
 

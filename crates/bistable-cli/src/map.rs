@@ -2,7 +2,6 @@
 //! in parallel, written row by row to a resumable CSV file and drawn as a PNG.
 
 use std::collections::{HashMap, HashSet};
-use std::io::{BufRead, BufReader};
 use std::path::{Path, PathBuf};
 use std::time::Instant as WallClock;
 
@@ -299,68 +298,24 @@ impl Drop for OutLock {
 /// The rows already in `path` (none if it does not exist). Drops an incomplete last line (an
 /// interrupted write) from the file; refuses a file with another header or other `ζ`, `e`.
 fn read_existing(path: &Path, model: &Model) -> Result<Vec<Record>, CliError> {
-    let file = match std::fs::File::open(path) {
-        Ok(f) => f,
-        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(Vec::new()),
-        Err(e) => return Err(CliError::io("cannot read", path, e)),
-    };
-    let bad = |rule: String| CliError::invalid_text("--out", path.display(), rule);
-    let mut reader = BufReader::new(file);
     let mut records = Vec::new();
-    let mut line = String::new();
-    let mut complete_len = 0u64;
-    let mut first = true;
-    loop {
-        line.clear();
-        let n = reader
-            .read_line(&mut line)
-            .map_err(|e| CliError::io("cannot read", path, e))?;
-        if n == 0 || !line.ends_with('\n') {
-            break;
+    crate::output::read_resumable(path, &CSV_COLUMNS.join(","), "map", |text| {
+        let cells: Vec<&str> = text.split(',').collect();
+        let r = Record::from_csv(&cells)
+            .map_err(|e| format!("has a bad row {}: {e}", records.len() + 2))?;
+        if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
+            return Err(format!(
+                "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
+                 another file",
+                r.zeta,
+                r.restitution,
+                model.params.zeta(),
+                model.restitution()
+            ));
         }
-        let text = line.trim_end();
-        if first {
-            first = false;
-            if text != CSV_COLUMNS.join(",") {
-                return Err(bad(format!(
-                    "is not a map file (its header is not {})",
-                    CSV_COLUMNS.join(",")
-                )));
-            }
-        } else if !text.is_empty() {
-            let cells: Vec<&str> = text.split(',').collect();
-            let r = Record::from_csv(&cells)
-                .map_err(|e| bad(format!("has a bad row {}: {e}", records.len() + 2)))?;
-            if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
-                return Err(bad(format!(
-                    "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
-                     another file",
-                    r.zeta,
-                    r.restitution,
-                    model.params.zeta(),
-                    model.restitution()
-                )));
-            }
-            records.push(r);
-        }
-        complete_len += n as u64;
-    }
-    if first && complete_len == 0 {
-        // Empty (or only a partial header): start afresh.
-        CsvFile::create(path, &CSV_COLUMNS.join(","))?.finish()?;
-        return Ok(records);
-    }
-    let actual = std::fs::metadata(path)
-        .map_err(|e| CliError::io("cannot read", path, e))?
-        .len();
-    if actual > complete_len {
-        let f = std::fs::OpenOptions::new()
-            .write(true)
-            .open(path)
-            .map_err(|e| CliError::io("cannot open", path, e))?;
-        f.set_len(complete_len)
-            .map_err(|e| CliError::io("cannot truncate", path, e))?;
-    }
+        records.push(r);
+        Ok(())
+    })?;
     Ok(records)
 }
 

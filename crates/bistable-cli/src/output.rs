@@ -2,7 +2,7 @@
 
 use std::fmt::Write as _;
 use std::fs::File;
-use std::io::{BufWriter, Write};
+use std::io::{BufRead, BufReader, BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use serde::Serialize;
@@ -130,6 +130,65 @@ impl CsvFile {
         self.flush()?;
         Ok(self.path)
     }
+}
+
+/// Reads a resumable CSV this program writes row by row (`--out` of `map` and `basins`): nothing
+/// if `path` does not exist; a file whose first line is not `header` is refused as not a `kind`
+/// file; each complete non-empty row after it goes to `row`, whose `Err` is the reason the file
+/// is refused (reported as `--out`'s); an incomplete last line (an interrupted write) is cut
+/// from the file, and a file without a complete header is started afresh with `header`.
+pub fn read_resumable(
+    path: &Path,
+    header: &str,
+    kind: &str,
+    mut row: impl FnMut(&str) -> Result<(), String>,
+) -> Result<(), CliError> {
+    let file = match File::open(path) {
+        Ok(f) => f,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) => return Err(CliError::io("cannot read", path, e)),
+    };
+    let bad = |rule: String| CliError::invalid_text("--out", path.display(), rule);
+    let mut reader = BufReader::new(file);
+    let (mut line, mut first, mut complete) = (String::new(), true, 0u64);
+    loop {
+        line.clear();
+        let n = reader
+            .read_line(&mut line)
+            .map_err(|e| CliError::io("cannot read", path, e))?;
+        if n == 0 || !line.ends_with('\n') {
+            break;
+        }
+        let text = line.trim_end();
+        if first {
+            first = false;
+            if text != header {
+                return Err(bad(format!(
+                    "is not a {kind} file (its header is not {header})"
+                )));
+            }
+        } else if !text.is_empty() {
+            row(text).map_err(bad)?;
+        }
+        complete += n as u64;
+    }
+    if first && complete == 0 {
+        // Empty (or only a partial header): start afresh.
+        CsvFile::create(path, header)?.finish()?;
+        return Ok(());
+    }
+    let actual = std::fs::metadata(path)
+        .map_err(|e| CliError::io("cannot read", path, e))?
+        .len();
+    if actual > complete {
+        let f = std::fs::OpenOptions::new()
+            .write(true)
+            .open(path)
+            .map_err(|e| CliError::io("cannot open", path, e))?;
+        f.set_len(complete)
+            .map_err(|e| CliError::io("cannot truncate", path, e))?;
+    }
+    Ok(())
 }
 
 /// Creates the parent directory of `path` if it is missing.
