@@ -80,19 +80,6 @@ static int iX, iVel, iZ, iZdot, iKE, iPE, iCount, iLastT, iPhase, iVb, iVa, iDk,
 static int out_real[MAXV], n_out_real, out_int[MAXV], n_out_int, out_bool[MAXV], n_out_bool;
 static fmi2ValueReference vr_out_real[MAXV], vr_out_int[MAXV], vr_out_bool[MAXV];
 
-/* Copies the value of attribute `key` found in [p, end) into buf; 0 if absent. */
-static int attr(const char *p, const char *end, const char *key, char *buf, size_t n) {
-    char pat[64];
-    snprintf(pat, sizeof pat, " %s=\"", key);
-    const char *q = strstr(p, pat);
-    if (!q || q >= end) return 0;
-    q += strlen(pat);
-    size_t k = 0;
-    while (q < end && *q != '"' && k + 1 < n) buf[k++] = *q++;
-    buf[k] = 0;
-    return 1;
-}
-
 static int index_of(const char *name) {
     for (int i = 0; i < nv; i++)
         if (strcmp(vars[i].name, name) == 0) return i;

@@ -37,19 +37,6 @@ int load(const char *path) {
 /* ---- model description: guid and value references by name ---- */
 char *xml;
 
-static char *read_file(const char *path) {
-    FILE *f = fopen(path, "rb");
-    if (!f) return NULL;
-    fseek(f, 0, SEEK_END);
-    long n = ftell(f);
-    fseek(f, 0, SEEK_SET);
-    char *s = malloc((size_t)n + 1);
-    if (s && fread(s, 1, (size_t)n, f) != (size_t)n) n = 0;
-    if (s) s[n] = 0;
-    fclose(f);
-    return s;
-}
-
 /* The value reference of the variable `name` (exits if absent). */
 fmi2ValueReference vr(const char *name) {
     char key[128];
@@ -525,7 +512,7 @@ int main(int argc, char **argv) {
                 argv[0], argv[0]);
         return 2;
     }
-    xml = read_file(argv[3]);
+    xml = read_text(argv[3]);
     if (!xml) {
         fprintf(stderr, "cannot read %s\n", argv[3]);
         return 2;

@@ -14,6 +14,7 @@
 #include <time.h>
 
 #include "bistable_impact.h"
+#include "md_text.h"
 
 #define FMI_FUNCTIONS(X)                                                                      \
     X(fmi2GetTypesPlatform) X(fmi2GetVersion) X(fmi2SetDebugLogging) X(fmi2Instantiate)      \

@@ -18,6 +18,7 @@
 #include <time.h>
 
 #include "fmi3Functions.h"
+#include "../md_text.h"
 #include "fmi2FunctionTypes.h"
 
 /* Every function of fmi3Functions.h; all are exported by the binary (the ones the FMU does not
