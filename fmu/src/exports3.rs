@@ -510,10 +510,7 @@ unsafe fn get_absent<T>(
     name: &'static str,
 ) -> fmi3Status {
     call(c, func, allowed::GET, |inst| {
-        scalars(nvr, n_values)?;
-        array_mut(values, nvr, "values")?;
-        inst.get(array(vr, nvr, "valueReferences")?, Access::Absent(name))?;
-        Ok(fmi3OK)
+        get_absent_in(inst, vr, nvr, values, n_values, name)
     })
 }
 
@@ -528,13 +525,7 @@ unsafe fn set_absent<T>(
     name: &'static str,
 ) -> fmi3Status {
     call(c, func, allowed::SET, |inst| {
-        scalars(nvr, n_values)?;
-        array(values, nvr, "values")?;
-        inst.set(
-            array(vr, nvr, "valueReferences")?,
-            &vec![0.0; nvr],
-            Access::Absent(name),
-        )
+        set_absent_in(inst, vr, nvr, values, n_values, name)
     })
 }
 
@@ -793,16 +784,11 @@ pub unsafe extern "C" fn fmi3SetBinary(
     call(instance, "fmi3SetBinary", allowed::SET, |inst| {
         scalars(n, nValues)?;
         array(valueSizes, nValues, "valueSizes")?;
-        array(values, nValues, "values")?;
-        inst.set(
-            array(vr, n, "valueReferences")?,
-            &vec![0.0; n],
-            Access::Absent("Binary"),
-        )
+        set_absent_in(inst, vr, n, values, nValues, "Binary")
     })
 }
 
-/// The refusal of [`get_absent`] inside a call that checked more arguments.
+/// The refusal of [`get_absent`] (also inside a call that checked more arguments).
 unsafe fn get_absent_in<T>(
     inst: &mut Instance,
     vr: *const fmi3ValueReference,
@@ -815,6 +801,24 @@ unsafe fn get_absent_in<T>(
     array_mut(values, nvr, "values")?;
     inst.get(array(vr, nvr, "valueReferences")?, Access::Absent(name))?;
     Ok(fmi3OK)
+}
+
+/// The refusal of [`set_absent`] (also inside a call that checked more arguments).
+unsafe fn set_absent_in<T>(
+    inst: &mut Instance,
+    vr: *const fmi3ValueReference,
+    nvr: usize,
+    values: *const T,
+    n_values: usize,
+    name: &'static str,
+) -> Outcome {
+    scalars(nvr, n_values)?;
+    array(values, nvr, "values")?;
+    inst.set(
+        array(vr, nvr, "valueReferences")?,
+        &vec![0.0; nvr],
+        Access::Absent(name),
+    )
 }
 
 /// The model has no clocks: every value reference is refused.
