@@ -4,6 +4,8 @@
 CARGO ?= cargo
 OUT ?= out
 BISTABLE := target/release/bistable
+DEMO_MAP = $(BISTABLE) map --omega-range 0.2:3.5:60 --velocity-range 0.005:0.2:40 \
+	--out $(OUT)/map.csv --plot $(OUT)/map.png --json > $(OUT)/map_summary.json
 
 .PHONY: all setup build test test-rust lint demo bench stress stress-core clean
 
@@ -48,8 +50,10 @@ demo: build $(DEMO_TARGETS)
 	$(BISTABLE) classify --omega 0.85 --velocity 0.11 > $(OUT)/classify_0.85_0.11.json
 	$(BISTABLE) classify --omega 0.85 --velocity 0.15 > $(OUT)/classify_0.85_0.15.json
 	$(BISTABLE) thresholds --json > $(OUT)/thresholds.json
-	$(BISTABLE) map --omega-range 0.2:3.5:60 --velocity-range 0.005:0.2:40 \
-		--out $(OUT)/map.csv --plot $(OUT)/map.png --json > $(OUT)/map_summary.json
+	# The map resumes from an existing map.csv; one written by an older version (other columns)
+	# is refused by the CLI as "not a map file", and the demo then starts the map afresh.
+	$(DEMO_MAP) 2> $(OUT)/map.err || { cat $(OUT)/map.err; grep -q "is not a map file" $(OUT)/map.err \
+		&& rm -f $(OUT)/map.csv && $(DEMO_MAP); }
 	$(BISTABLE) bifurcation --param omega --range 2.0:2.7:141 --velocity 0.07 \
 		--out $(OUT)/bifurcation.csv --plot $(OUT)/bifurcation.png --json > $(OUT)/bifurcation_summary.json
 	$(BISTABLE) orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 --arclength \
