@@ -6,11 +6,16 @@
 //! equations, see [`bistable_core::Classification::transient_efoldings`]) cannot be trusted to
 //! land on the same attractor once rounding errors of relative size `1e-16` have grown to
 //! `1e-16·e^N`: beyond about `ln(1e16) ≈ 37` e-foldings they are of order one, and a basin
-//! boundary may be much closer than that. Such a run — and every run that is still aperiodic at
-//! the end, whose Lyapunov verdict depends on the stretch of the attractor it happens to
-//! average over — is repeated [`SensitivityOptions::repeats`] times: twice from the paper's
-//! initial condition with a coarser tolerance, otherwise from starts displaced by
-//! [`SensitivityOptions::perturbation`]. The point is
+//! boundary may be much closer than that. Such a run (and one decided later than the
+//! [`SensitivityOptions::horizon`] over which the growth is tracked) is repeated
+//! [`SensitivityOptions::repeats`] times: twice from the paper's initial condition with a
+//! coarser tolerance, otherwise from starts displaced by [`SensitivityOptions::perturbation`].
+//! A run still aperiodic at the end is repeated too, but only for
+//! [`SensitivityOptions::repeat_periods`]: nearby starts that end elsewhere leave the chaotic
+//! set early, in the transient from the initial condition; and its chaos verdict, which depends
+//! on the stretch of the attractor the Lyapunov window happens to average over (a window that
+//! meets sticking gives "not chaotic"), is repeated on [`SensitivityOptions::windows`] further
+//! windows, the last stretches of the run itself (no further integration). The point is
 //! *sensitive* when the runs do not all reach the same outcome (class, period, chaos, final
 //! well); the reported classification is that of the most frequent outcome. Runs decided with
 //! less growth stay a single run. A chaotic attractor reached and kept by every run is a
@@ -32,11 +37,14 @@ pub struct SensitivityOptions {
     pub efoldings: f64,
     /// Displacement of the repeats' initial state `(x0, x0')` from `(0, 0)`.
     pub perturbation: f64,
+    /// Stretch of the run, in natural periods, over which the transient growth is tracked; a
+    /// run decided later is repeated too.
+    pub horizon: f64,
     /// Length of the repeats of an aperiodic run, in natural periods (a repeat still aperiodic
-    /// then is counted as aperiodic, chaotic or not by its own Lyapunov exponent); also the
-    /// stretch over which the growth is tracked, and a run decided later is repeated too.
+    /// then counts as the run's own outcome).
     pub repeat_periods: f64,
-    /// Further Lyapunov windows of an aperiodic run, each a verdict on `chaotic`.
+    /// Further Lyapunov windows of an aperiodic run, each a verdict on `chaotic`: the last
+    /// stretches of the run itself, as many as fit in it.
     pub windows: u32,
 }
 
@@ -50,7 +58,8 @@ impl Default for SensitivityOptions {
             repeats: 8,
             efoldings: DEFAULT_EFOLDINGS,
             perturbation: 1e-12,
-            repeat_periods: 1000.0,
+            horizon: 1000.0,
+            repeat_periods: 200.0,
             windows: 8,
         }
     }
@@ -66,8 +75,8 @@ impl SensitivityOptions {
     }
 
     /// Checks the settings in the order of the fields: `repeats` (`<= 64`), `efoldings`
-    /// (`(0, 700]`), `perturbation` (`(0, 1e-3]`), `repeat_periods` (`[1, 1e8]`), `windows`
-    /// (`<= 1024`).
+    /// (`(0, 700]`), `perturbation` (`(0, 1e-3]`), `horizon` and `repeat_periods` (`[1, 1e8]`),
+    /// `windows` (`<= 1024`).
     pub fn check(&self) -> Result<Self, ParamError> {
         let r = self.repeats;
         check("repeats", f64::from(r), r <= 64, "must be in [0, 64]")?;
@@ -80,13 +89,12 @@ impl SensitivityOptions {
             d > 0.0 && d <= 1e-3,
             "must be in (0, 1e-3]",
         )?;
-        let p = self.repeat_periods;
-        check(
-            "repeat_periods",
-            p,
-            (1.0..=1e8).contains(&p),
-            "must be in [1, 1e8]",
-        )?;
+        for (name, p) in [
+            ("horizon", self.horizon),
+            ("repeat_periods", self.repeat_periods),
+        ] {
+            check(name, p, (1.0..=1e8).contains(&p), "must be in [1, 1e8]")?;
+        }
         let w = self.windows;
         check("windows", f64::from(w), w <= 1024, "must be in [0, 1024]")?;
         Ok(*self)
@@ -149,13 +157,13 @@ pub enum Trigger {
     Growth,
     /// Still aperiodic at the end of the run.
     Aperiodic,
-    /// Decided after more than [`SensitivityOptions::repeat_periods`] natural periods (the
-    /// growth is tracked over that stretch only).
+    /// Decided after more than [`SensitivityOptions::horizon`] natural periods (the growth is
+    /// tracked over that stretch only).
     Late,
 }
 
 impl Trigger {
-    /// `none`, `growth` or `aperiodic`.
+    /// `none`, `growth`, `aperiodic` or `late`.
     pub fn name(self) -> &'static str {
         match self {
             Trigger::None => "none",
@@ -249,10 +257,10 @@ pub fn classify_sensitive(
     co: ClassifyOptions,
     so: SensitivityOptions,
 ) -> Result<(Classification, Sensitivity), SimError> {
-    // The growth is tracked over the first `repeat_periods` natural periods; a run decided
-    // later than that is suspect by its length alone.
+    // The growth is tracked over the first `horizon` natural periods; a run decided later than
+    // that is suspect by its length alone.
     let horizon_sections =
-        (so.repeat_periods * std::f64::consts::TAU / model.shaker_period()).ceil() as u64;
+        (so.horizon * std::f64::consts::TAU / model.shaker_period()).ceil() as u64;
     let run = |co: ClassifyOptions,
                opts: SolverOptions,
                start: (f64, f64),
@@ -274,7 +282,7 @@ pub fn classify_sensitive(
         Trigger::Aperiodic
     } else if base.transient_efoldings.is_some_and(|g| g >= so.efoldings) {
         Trigger::Growth
-    } else if !co.full_length && base.periods_simulated > so.repeat_periods {
+    } else if !co.full_length && base.periods_simulated > so.horizon {
         Trigger::Late
     } else {
         Trigger::None

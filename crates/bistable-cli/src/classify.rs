@@ -38,11 +38,12 @@ and reach order one after a few hundred time units; which attractor such a run
 ends on is then decided by rounding, and no double-precision run can decide it
 (another tolerance, order or start 1e-12 away ends elsewhere). A run is repeated
 when an infinitesimal perturbation grew by at least --efoldings e-foldings
-before its class was decided (variational equations, over the first
---repeat-periods natural periods), when it was decided later than that, or when
-it is still aperiodic at the end: --repeats runs (tol x10, x100, and starts
-displaced by --perturbation), and for an aperiodic run --lyapunov-windows
-further Lyapunov windows of its own, each a verdict on 'chaotic'. The point is
+before its class was decided (variational equations, over the first --horizon
+natural periods), when it was decided later than that, or when it is still
+aperiodic at the end: --repeats runs (tol x10, x100, and starts displaced by
+--perturbation; those of an aperiodic run last --repeat-periods natural
+periods), and for an aperiodic run --lyapunov-windows further Lyapunov windows,
+the last stretches of the run itself, each a verdict on 'chaotic'. The point is
 'sensitive' when these do not all agree (class, period, chaos, final well); the
 reported result is the most frequent outcome. Points decided early stay a single
 run; a chaotic attractor that every run reaches and keeps is 'chaotic', not
@@ -113,12 +114,18 @@ pub struct ClassifyArgs {
     #[arg(long, value_name = "D", default_value = "1e-12")]
     pub perturbation: f64,
 
-    /// Sensitivity test: length of the repeats of an aperiodic run, in natural periods.
+    /// Sensitivity test: natural periods over which the transient growth is tracked; a run
+    /// decided later is repeated too (in [1, 1e8]).
+    #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().horizon)]
+    pub horizon: f64,
+
+    /// Sensitivity test: length of the repeats of an aperiodic run, in natural periods (in
+    /// [1, 1e8]).
     #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().repeat_periods)]
     pub repeat_periods: f64,
 
     /// Sensitivity test: further Lyapunov windows of an aperiodic run, each a verdict on
-    /// 'chaotic' (0..=1024).
+    /// 'chaotic': the last stretches of the run itself, as many as fit (0..=1024).
     #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().windows)]
     pub lyapunov_windows: u32,
 }
@@ -142,6 +149,7 @@ impl ClassifyArgs {
             repeats: self.repeats,
             efoldings: self.efoldings,
             perturbation: self.perturbation,
+            horizon: self.horizon,
             repeat_periods: self.repeat_periods,
             windows: self.lyapunov_windows,
         };

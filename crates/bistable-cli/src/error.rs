@@ -147,6 +147,7 @@ impl From<ParamError> for CliError {
             "repeats" => "--repeats",
             "efoldings" => "--efoldings",
             "perturbation" => "--perturbation",
+            "horizon" => "--horizon",
             "repeat_periods" => "--repeat-periods",
             "windows" => "--lyapunov-windows",
             other => return CliError::invalid(other, e.value, e.rule),

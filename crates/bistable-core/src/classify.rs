@@ -133,7 +133,7 @@ pub struct Classification {
     /// [`classify_from`], so values at the cap mean "at least", or after the number of periods
     /// given there. `None` when not tracked.
     pub transient_efoldings: Option<f64>,
-    /// For an aperiodic response with extra Lyapunov windows asked of [`classify_from`]: how
+    /// For an aperiodic response with further Lyapunov windows asked of [`classify_from`]: how
     /// many of them found `λ > 1e-3` (chaotic), and how many there were. `None` otherwise.
     pub chaos_votes: Option<(u32, u32)>,
     /// For a periodic response: the stroboscopic section point `(x, x')` (plate phase 0) of the
@@ -172,7 +172,9 @@ pub struct Tracking {
     /// of this first stretch of the run.
     pub track_periods: u64,
     /// For an aperiodic response, this many further Lyapunov windows of `lyapunov_periods`
-    /// after the one that decides `chaotic` ([`Classification::chaos_votes`]).
+    /// besides the one after the run that decides `chaotic` ([`Classification::chaos_votes`]):
+    /// the last stretches of the run itself (as many as fit in it), measured alongside it, so
+    /// they cost no further integration.
     pub extra_windows: u32,
     /// Skip the Lyapunov exponent of an aperiodic response (`lyapunov` is then `None` and
     /// `chaotic` false): for runs that only ask whether a period is reached.
@@ -196,10 +198,16 @@ pub fn classify_from(
         .ceil()
         .max(1.0) as u64;
     let mut sim = Simulator::with_state(params, plate.into(), opts, 0.0, start.0, start.1)?;
-    let mut growth = efoldings_cap.map(|cap| {
+    let mut growth = efoldings_cap.map(Growth::new);
+    let mut votes = Votes::new(
+        track.extra_windows,
+        co.lyapunov_periods,
+        max_sections,
+        !track.no_lyapunov,
+    );
+    if growth.is_some() {
         sim.start_variational();
-        Growth::new(cap)
-    });
+    }
     let keep = (4 * co.max_period + 8) as usize;
     let mut hist: VecDeque<Section> = VecDeque::with_capacity(keep + 1);
     let mut sticks = 0u64;
@@ -221,12 +229,26 @@ pub fn classify_from(
         if hist.len() > keep {
             hist.pop_front();
         }
-        if let Some(g) = growth.as_mut() {
-            g.section(&mut sim);
-            if track.track_periods > 0 && k >= track.track_periods && g.live {
-                g.live = false;
-                sim.disable_variational();
+        if growth.as_ref().is_some_and(|g| g.live) || votes.measuring(k) {
+            let l = sim.renormalize_variational();
+            if l.is_none() {
+                // Stuck (Φ = 0): a new stretch starts with the next free flight.
+                sim.reseed_variational();
             }
+            if let Some(g) = growth.as_mut() {
+                g.section(l);
+                if track.track_periods > 0 && k >= track.track_periods {
+                    g.live = false;
+                }
+            }
+            votes.section(k, l);
+        }
+        if votes.from == Some(k + 1) {
+            // The next section warms up the windows' measurement: from its first step on,
+            // without restarting the integration (the ongoing step carries no variation).
+            sim.track_variational();
+        } else if !growth.as_ref().is_some_and(|g| g.live) && !votes.measuring(k + 1) {
+            sim.disable_variational();
         }
         let rest = at_rest_in_well_two(&sim, plate);
         let found = if rest {
@@ -280,21 +302,14 @@ pub fn classify_from(
             .fold([f64::INFINITY, 0.0], |a, y| if y[0] < a[0] { y } else { a })
     });
     let transient_efoldings = growth.as_ref().map(|g| g.max.min(g.cap));
-    if growth.is_some() {
-        sim.disable_variational();
-    }
+    sim.disable_variational();
     let lyapunov = match period {
         Some(_) => None,
         None if track.no_lyapunov => None,
         None => lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?,
     };
-    let chaos_votes = if period.is_none() && track.extra_windows > 0 && !track.no_lyapunov {
-        let mut chaotic = 0;
-        for _ in 0..track.extra_windows {
-            let l = lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?;
-            chaotic += u32::from(l.is_some_and(|l| l > CHAOS));
-        }
-        Some((chaotic, track.extra_windows))
+    let chaos_votes = if period.is_none() {
+        votes.result(period_len)
     } else {
         None
     };
@@ -340,28 +355,88 @@ impl Growth {
         }
     }
 
-    fn section(&mut self, sim: &mut Simulator) {
+    /// Takes the log-growth of one section (`None`: stuck, the past is forgotten and a new
+    /// stretch starts with the next free flight).
+    fn section(&mut self, growth: Option<f64>) {
         if !self.live {
             return;
         }
-        match sim.renormalize_variational() {
+        match growth {
             Some(l) => {
                 self.acc += l;
                 self.low = self.low.min(self.acc);
                 self.max = self.max.max(self.acc - self.low);
             }
             None => {
-                // Stuck (Φ = 0): the past is forgotten; a new stretch starts with the next
-                // free flight.
                 self.acc = 0.0;
                 self.low = 0.0;
-                sim.reseed_variational();
             }
         }
         if self.max >= self.cap {
             self.live = false;
-            sim.disable_variational();
         }
+    }
+}
+
+/// Chaos verdicts of the last windows of a run (sections `from + 1 ..= run`, `len` each; the
+/// variation is started during section `from`, which only warms it up).
+struct Votes {
+    /// Section after which the windows start (`None`: no windows; otherwise at least 2).
+    from: Option<u64>,
+    len: u64,
+    /// Per window: log-growth, and whether it met sticking.
+    windows: Vec<(f64, bool)>,
+}
+
+impl Votes {
+    /// `wanted` windows of `len` sections at the end of a run of `run` sections, as many as fit
+    /// after its first two sections (none when `measure` is false).
+    fn new(wanted: u32, len: u32, run: u64, measure: bool) -> Self {
+        let len = u64::from(len.max(1));
+        let n = if measure {
+            u64::from(wanted).min(run.saturating_sub(2) / len)
+        } else {
+            0
+        };
+        Self {
+            from: (n > 0).then(|| run - n * len),
+            len,
+            windows: vec![(0.0, false); n as usize],
+        }
+    }
+
+    /// Whether the variation is measured over section `k` (a window's or the warm-up).
+    fn measuring(&self, k: u64) -> bool {
+        self.from == Some(k) || self.counting(k)
+    }
+
+    /// Whether section `k` belongs to a window.
+    fn counting(&self, k: u64) -> bool {
+        self.from
+            .is_some_and(|f| k > f && k <= f + self.len * self.windows.len() as u64)
+    }
+
+    fn section(&mut self, k: u64, growth: Option<f64>) {
+        if let (true, Some(f)) = (self.counting(k), self.from) {
+            let w = &mut self.windows[((k - f - 1) / self.len) as usize];
+            match growth {
+                Some(l) => w.0 += l,
+                None => w.1 = true,
+            }
+        }
+    }
+
+    /// Chaotic windows (no sticking, `λ > 1e-3`) and windows, if any were measured.
+    fn result(&self, period_len: f64) -> Option<(u32, u32)> {
+        (!self.windows.is_empty()).then(|| {
+            let span = self.len as f64 * period_len;
+            let chaotic = self
+                .windows
+                .iter()
+                .filter(|w| !w.1 && w.0 / span > CHAOS)
+                .count();
+            (chaotic as u32, self.windows.len() as u32)
+        })
     }
 }
 

@@ -590,6 +590,19 @@ impl Simulator {
         }
     }
 
+    /// Starts the variational solution from `Φ = I` at the start of the next free-flight step,
+    /// without restarting the integration (the trajectory is not affected); until then
+    /// [`Simulator::renormalize_variational`] gives `None`. Does nothing if it is running.
+    pub fn track_variational(&mut self) {
+        if self.var.is_none() {
+            self.var = Some(Variational {
+                phi: [[0.0; 2]; 2],
+                cols: [[0.0; BUF]; 2],
+                reseed: true,
+            });
+        }
+    }
+
     /// Restarts the variational solution from `Φ = I` at the start of the next free-flight
     /// step, without restarting the integration (the trajectory is not affected): for a
     /// variation that sticking has set to zero.

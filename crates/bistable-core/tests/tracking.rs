@@ -80,3 +80,41 @@ fn tracking_leaves_the_classification_unchanged() {
         }
     }
 }
+
+/// The further Lyapunov windows are the last stretches of the run itself: as many as fit, each
+/// a verdict that agrees with the exponent's sign where the dynamics leaves no doubt.
+#[test]
+fn window_votes_come_from_the_end_of_the_run() {
+    let votes = |w: f64, v: f64, periods: f64, max_period: u32, windows: u32| {
+        let co = ClassifyOptions {
+            max_natural_periods: periods,
+            max_period,
+            lyapunov_periods: 300,
+            ..ClassifyOptions::default()
+        };
+        let track = Tracking {
+            extra_windows: windows,
+            ..Tracking::default()
+        };
+        let plate = Sinusoid::new(w, v).unwrap();
+        let t = classify_from(
+            Params::paper(),
+            plate,
+            SolverOptions::default(),
+            co,
+            (0.0, 0.0),
+            track,
+        )
+        .unwrap();
+        assert_eq!(t.period, None, "({w}, {v}) must run to the end");
+        t.chaos_votes.unwrap()
+    };
+    // Chaos (λ = 0.177 over long runs): every window is chaotic.
+    assert_eq!(votes(2.45, 0.07, 3_000.0, 16, 8), (8, 8));
+    // The stable P-2 orbit at Ω = 2.2 with only period 1 looked for runs to the end; its
+    // windows contract (Floquet multipliers inside the unit circle): none is chaotic.
+    assert_eq!(votes(2.2, 0.07, 3_000.0, 1, 8), (0, 8));
+    // 1,000 natural periods at Ω = 2.45 are 2,450 sections: 8 windows of 300 fit, 9 do not
+    // (the first two sections are never part of a window).
+    assert_eq!(votes(2.45, 0.07, 1_000.0, 16, 64).1, 8);
+}
