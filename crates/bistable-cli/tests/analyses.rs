@@ -258,6 +258,69 @@ fn every_point_whose_label_flips_with_tol_is_sensitive() {
     assert!(missed.is_empty(), "not flagged: {missed:#?}");
 }
 
+/// The map's sensitivity test skips work without changing any label: on the 60 × 40 grid every
+/// point has the label (class, period, chaotic, final well, at rest in well 2) of the full test
+/// it replaced (`tests/data/map_labels_60x40.csv`: further Lyapunov windows integrated after the
+/// run, repeats of an aperiodic run over 1,000 natural periods; see `tests/data/README.md`).
+#[test]
+fn map_labels_equal_those_of_the_full_sensitivity_test() {
+    let dir = scratch("labels");
+    let csv = dir.join("map.csv");
+    json(&[
+        "map",
+        "--omega-range",
+        "0.2:3.5:60",
+        "--velocity-range",
+        "0.005:0.2:40",
+        "--out",
+        s(&csv),
+        "--json",
+    ]);
+    let label = |r: &std::collections::HashMap<String, String>| {
+        [
+            "class",
+            "period",
+            "chaotic",
+            "final_well",
+            "at_rest_in_second_well",
+        ]
+        .map(|k| r[k].as_str())
+        .join("/")
+    };
+    let rows: std::collections::HashMap<(String, String), (String, String)> = csv_rows(&csv)
+        .iter()
+        .map(|r| {
+            (
+                (r["omega"].clone(), r["velocity"].clone()),
+                (label(r), r["sensitive"].clone()),
+            )
+        })
+        .collect();
+    assert_eq!(rows.len(), 2400);
+    let stored = include_str!("data/map_labels_60x40.csv");
+    let (mut changed, mut flags_gained, mut flags_lost) = (Vec::new(), 0, 0);
+    for line in stored.lines().skip(1) {
+        let f: Vec<&str> = line.split(',').collect();
+        let (label, sensitive) = &rows[&(f[0].to_string(), f[1].to_string())];
+        if label != f[2] {
+            changed.push(format!("({}, {}): {} -> {label}", f[0], f[1], f[2]));
+        }
+        match (f[3], sensitive.as_str()) {
+            ("false", "true") => flags_gained += 1,
+            ("true", "false") => flags_lost += 1,
+            _ => {}
+        }
+    }
+    assert!(
+        changed.is_empty(),
+        "{} labels changed ({flags_gained} sensitive flags gained, {flags_lost} lost): {changed:#?}",
+        changed.len()
+    );
+    eprintln!(
+        "60 x 40 labels unchanged; sensitive flags: {flags_gained} gained, {flags_lost} lost"
+    );
+}
+
 #[test]
 fn basins_find_coexisting_attractors_and_resume() {
     let dir = scratch("basins");
