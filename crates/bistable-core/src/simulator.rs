@@ -785,10 +785,7 @@ impl Simulator {
                         v.reseed = false;
                     }
                     let [dx, dv] = v.phi;
-                    v.cols = [
-                        taylor::variation(zeta, s, p, dx[0], dv[0]),
-                        taylor::variation(zeta, s, p, dx[1], dv[1]),
-                    ];
+                    v.cols = taylor::variation(zeta, s, p, [[dx[0], dv[0]], [dx[1], dv[1]]]);
                 }
                 let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol).min(room);
                 if h.is_nan() || h < 0.0 {

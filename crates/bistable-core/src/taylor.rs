@@ -133,27 +133,37 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-/// One column of the variational equation `δx'' = −2ζδx' − U''(x)δx` along a flight series, from
-/// `(δx, δx')` at the step start: coefficients `0..=order + 1` into `out`.
+/// The two columns of the variational equation `δx'' = −2ζδx' − U''(x)δx` along a flight
+/// series, from their `(δx, δx')` at the step start: coefficients `0..=order + 1` of each.
+/// The two columns share the series of `U''(x)` and are computed in one pass (two independent
+/// sums per order; each in the order of a plain sum from `−0.0`).
 pub(crate) fn variation(
     zeta: f64,
     s: &FlightSeries,
     order: usize,
-    d0: f64,
-    dv0: f64,
-) -> [f64; BUF] {
+    starts: [[f64; 2]; 2],
+) -> [[f64; BUF]; 2] {
     // U''(x) = 1 − 6x + 6x², as a series.
     let mut a = [0.0; BUF];
     for ((ak, sq), x) in a.iter_mut().zip(&s.sq).zip(&s.x).take(order) {
         *ak = 6.0 * (sq - x);
     }
     a[0] += 1.0;
-    let mut d = [0.0; BUF];
-    d[0] = d0;
-    d[1] = dv0;
+    let mut d = [[0.0; BUF]; 2];
+    for (col, start) in d.iter_mut().zip(starts) {
+        col[0] = start[0];
+        col[1] = start[1];
+    }
+    let [d0, d1] = &mut d;
     for k in 0..order {
-        let conv: f64 = (0..=k).map(|i| a[i] * d[k - i]).sum();
-        d[k + 2] = (-2.0 * zeta * (k + 1) as f64 * d[k + 1] - conv) * INV_PAIR[k];
+        let (mut c0, mut c1) = (-0.0_f64, -0.0_f64);
+        for i in 0..=k {
+            c0 += a[i] * d0[k - i];
+            c1 += a[i] * d1[k - i];
+        }
+        let damp = -2.0 * zeta * (k + 1) as f64;
+        d0[k + 2] = (damp * d0[k + 1] - c0) * INV_PAIR[k];
+        d1[k + 2] = (damp * d1[k + 1] - c1) * INV_PAIR[k];
     }
     d
 }
