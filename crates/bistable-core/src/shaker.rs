@@ -4,6 +4,7 @@
 //! of each step; both kinds provide them exactly (up to rounding).
 
 use crate::params::{check, ParamError};
+use crate::taylor::BUF;
 use crate::time::Instant;
 
 /// Highest polynomial degree accepted for an external plate piece.
@@ -107,15 +108,29 @@ impl Sinusoid {
     }
 
     fn series(&self, t: Instant, out: &mut [f64]) {
-        let (s, c) = self.angle(t).sin_cos();
-        // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
-        let cycle = [s, c, -s, -c];
+        self.magnitudes(out);
+        self.scale_by_phase(t, out);
+    }
+
+    /// Magnitudes `(V/Ω) Ω^k/k!` of the series coefficients: the part that does not depend on
+    /// time.
+    fn magnitudes(&self, out: &mut [f64]) {
         let mut a = self.velocity / self.omega;
         for (k, o) in out.iter_mut().enumerate() {
             if k > 0 {
                 a *= self.omega / k as f64;
             }
-            *o = a * cycle[k % 4];
+            *o = a;
+        }
+    }
+
+    /// The series at `t` from its magnitudes in `out`.
+    fn scale_by_phase(&self, t: Instant, out: &mut [f64]) {
+        let (s, c) = self.angle(t).sin_cos();
+        // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
+        let cycle = [s, c, -s, -c];
+        for (k, o) in out.iter_mut().enumerate() {
+            *o *= cycle[k % 4];
         }
         out[0] += self.offset;
     }
@@ -217,6 +232,28 @@ impl PlateMotion {
     pub fn series(&self, t: Instant, out: &mut [f64]) {
         match self {
             PlateMotion::Sinusoid(s) => s.series(t, out),
+            PlateMotion::Poly(p) => p.series(t, out),
+        }
+    }
+
+    /// What [`PlateMotion::series_with`] needs besides the time: a sinusoid's coefficient
+    /// magnitudes (computed once instead of at every step).
+    pub(crate) fn magnitudes(&self) -> [f64; BUF] {
+        let mut m = [0.0; BUF];
+        if let PlateMotion::Sinusoid(s) = self {
+            s.magnitudes(&mut m);
+        }
+        m
+    }
+
+    /// [`PlateMotion::series`] (the same values) with `mags` from [`PlateMotion::magnitudes`];
+    /// `out` is at most `BUF` long.
+    pub(crate) fn series_with(&self, t: Instant, mags: &[f64; BUF], out: &mut [f64]) {
+        match self {
+            PlateMotion::Sinusoid(s) => {
+                out.copy_from_slice(&mags[..out.len()]);
+                s.scale_by_phase(t, out);
+            }
             PlateMotion::Poly(p) => p.series(t, out),
         }
     }

@@ -238,6 +238,8 @@ pub struct Simulator {
     params: Params,
     opts: SolverOptions,
     plate: PlateMotion,
+    /// `plate.magnitudes()`.
+    plate_mags: [f64; BUF],
     order: usize,
     /// Start of the current step and the state there.
     t0: Instant,
@@ -338,6 +340,7 @@ impl Simulator {
         Self {
             params,
             opts,
+            plate_mags: plate.magnitudes(),
             plate,
             order: opts.order(),
             t0,
@@ -529,6 +532,7 @@ impl Simulator {
             });
         }
         self.plate = plate;
+        self.plate_mags = plate.magnitudes();
         self.restart_at_now(&st, z, zd);
         Ok(())
     }
@@ -724,7 +728,8 @@ impl Simulator {
     fn compute_step(&mut self) -> Result<(), SimError> {
         let p = self.order;
         let mut z = [0.0; BUF];
-        self.plate.series(self.t0, &mut z[..p + 3]);
+        self.plate
+            .series_with(self.t0, &self.plate_mags, &mut z[..p + 3]);
         let room = self
             .plate
             .horizon()
