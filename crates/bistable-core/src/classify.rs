@@ -18,7 +18,7 @@ use crate::events::{Event, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER_ENERGY};
 use crate::shaker::Sinusoid;
-use crate::simulator::{SimError, Simulator};
+use crate::simulator::{SimError, Simulator, State};
 
 /// Response class (model.md Sec. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -228,7 +228,7 @@ pub fn classify_from(
                 sim.disable_variational();
             }
         }
-        let rest = at_rest_in_well_two(&sim, plate);
+        let rest = at_rest_in_well_two(&st, plate);
         let found = if rest {
             Some((1, true))
         } else {
@@ -411,8 +411,7 @@ const SETTLED: f64 = 1e-12;
 
 /// In well 2, unable to cross the barrier or to reach the plate ever again (energy only decays
 /// without impacts).
-fn at_rest_in_well_two(sim: &Simulator, plate: Sinusoid) -> bool {
-    let st = sim.state();
+fn at_rest_in_well_two(st: &State, plate: Sinusoid) -> bool {
     if st.well != Well::Two || st.mode != crate::ContactMode::Free {
         return false;
     }
