@@ -15,9 +15,9 @@ use crate::events::{ContactMode, Event, Impact, StickCause, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
 use crate::roots::first_root;
-use crate::shaker::PlateMotion;
 #[cfg(doc)]
 use crate::shaker::Sinusoid;
+use crate::shaker::{PlateEval, PlateMotion};
 use crate::taylor::{self, eval, eval_d, FlightSeries, BUF};
 use crate::time::Instant;
 
@@ -238,8 +238,8 @@ pub struct Simulator {
     params: Params,
     opts: SolverOptions,
     plate: PlateMotion,
-    /// `plate.magnitudes()`.
-    plate_mags: [f64; BUF],
+    /// `plate`, evaluated with the work that repeats done once.
+    plate_eval: PlateEval,
     order: usize,
     /// Start of the current step and the state there.
     t0: Instant,
@@ -340,7 +340,7 @@ impl Simulator {
         Self {
             params,
             opts,
-            plate_mags: plate.magnitudes(),
+            plate_eval: PlateEval::new(plate),
             plate,
             order: opts.order(),
             t0,
@@ -532,7 +532,7 @@ impl Simulator {
             });
         }
         self.plate = plate;
-        self.plate_mags = plate.magnitudes();
+        self.plate_eval = PlateEval::new(plate);
         self.restart_at_now(&st, z, zd);
         Ok(())
     }
@@ -728,8 +728,7 @@ impl Simulator {
     fn compute_step(&mut self) -> Result<(), SimError> {
         let p = self.order;
         let mut z = [0.0; BUF];
-        self.plate
-            .series_with(self.t0, &self.plate_mags, &mut z[..p + 3]);
+        self.plate_eval.series(self.t0, &mut z[..p + 3]);
         let room = self
             .plate
             .horizon()
@@ -853,7 +852,7 @@ impl Simulator {
                     self.w0 = 0.0;
                     // Gap, its rate and (at a root of N) its curvature vanish.
                     self.pinned = if at_root { 3 } else { 2 };
-                    let (z, zd, _) = self.plate.motion(t1);
+                    let (z, zd, _) = self.plate_eval.motion(t1);
                     obs.event(&Event::StickEnd {
                         t: t1.to_f64(),
                         x: z,
@@ -897,8 +896,8 @@ impl Simulator {
         self.on_barrier = true;
         self.stats.snap_throughs += 1;
         let v = match self.mode {
-            ContactMode::Free => self.w0 + self.plate.motion(t1).1,
-            ContactMode::Sticking => self.plate.motion(t1).1,
+            ContactMode::Free => self.w0 + self.plate_eval.motion(t1).1,
+            ContactMode::Sticking => self.plate_eval.motion(t1).1,
         };
         obs.event(&Event::SnapThrough {
             t: t1.to_f64(),
@@ -925,7 +924,7 @@ impl Simulator {
         self.short_flights = 0;
         obs.event(&Event::StickStart {
             t: t1.to_f64(),
-            x: self.plate.motion(t1).0,
+            x: self.plate_eval.motion(t1).0,
             cause,
             impacts: self.stats.impacts,
         })
@@ -939,14 +938,14 @@ impl Simulator {
         obs: &mut impl Observer,
     ) -> Result<ControlFlow<()>, SimError> {
         let e = self.params.restitution();
-        let (z, zd, zdd) = self.plate.motion(t1);
+        let (z, zd, zdd) = self.plate_eval.motion(t1);
         let w_plus = self.params.rebound(w_minus);
         let v_before = w_minus + zd;
         let v_after = w_plus + zd;
         let imp = Impact {
             index: self.stats.impacts,
             t: t1.to_f64(),
-            phase: self.plate.phase_cycles(t1),
+            phase: self.plate_eval.phase_cycles(t1),
             x: z,
             v_before,
             v_after,
