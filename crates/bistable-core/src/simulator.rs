@@ -241,6 +241,8 @@ pub struct Simulator {
     /// `plate`, evaluated with the work that repeats done once.
     plate_eval: PlateEval,
     order: usize,
+    /// `opts.tol().ln()`.
+    ln_tol: f64,
     /// Start of the current step and the state there.
     t0: Instant,
     mode: ContactMode,
@@ -343,6 +345,7 @@ impl Simulator {
             plate_eval: PlateEval::new(plate),
             plate,
             order: opts.order(),
+            ln_tol: opts.tol().ln(),
             t0,
             mode: ContactMode::Free,
             u0,
@@ -737,6 +740,7 @@ impl Simulator {
             t: self.t0.to_f64(),
         };
         let tol = self.opts.tol();
+        let ln_tol = self.ln_tol;
         let zeta = self.params.zeta();
         let step = &mut self.step;
         step.len = 0.0;
@@ -781,7 +785,7 @@ impl Simulator {
                         taylor::variation(zeta, s, p, dx[1], dv[1]),
                     ];
                 }
-                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol).min(room);
+                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol, ln_tol).min(room);
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
@@ -813,7 +817,7 @@ impl Simulator {
                     };
                     return Ok(());
                 }
-                let h = taylor::step_size(&[&z[..=p], n], p, tol).min(room);
+                let h = taylor::step_size(&[&z[..=p], n], p, tol, ln_tol).min(room);
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }

@@ -183,8 +183,9 @@ pub(crate) fn contact_force(zeta: f64, z: &[f64; BUF], order: usize) -> [f64; BU
 }
 
 /// Jorba–Zou step size from the last two coefficients of the given series (each a slice of
-/// coefficients `0..=order`), for an absolute tolerance scaled by the size of the state.
-pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64) -> f64 {
+/// coefficients `0..=order`), for an absolute tolerance scaled by the size of the state
+/// (`ln_tol`: `tol.ln()`, the log of the tolerance when that size is at most 1).
+pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64, ln_tol: f64) -> f64 {
     let scale = series
         .iter()
         .map(|c| c[0].abs().max(c[1].abs()))
@@ -196,7 +197,7 @@ pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64) -> f64 {
         .map(|c| c[order - 1].abs())
         .fold(0.0, f64::max);
     // min((ε/prev)^(1/(p−1)), (ε/last)^(1/p)) times the safety factor e^(−0.7/(p−1)), in logs.
-    let ln_eps = eps.ln();
+    let ln_eps = if scale == 1.0 { ln_tol } else { eps.ln() };
     let l1 = (ln_eps - prev.ln() - 0.7) / (order - 1) as f64;
     let l2 = (ln_eps - last.ln()) / order as f64 - 0.7 / (order - 1) as f64;
     l1.min(l2).exp().min(MAX_STEP)
@@ -250,7 +251,7 @@ mod tests {
         let order = 24;
         let mut s = FlightSeries::default();
         flight(0.0, 0.3, 0.2, &z, order, &mut s);
-        let h = step_size(&[&s.x[..=order]], order, 1e-16);
+        let h = step_size(&[&s.x[..=order]], order, 1e-16, 1e-16_f64.ln());
         let e0 = 0.5 * 0.2 * 0.2 + crate::potential::energy(0.3);
         let (x, v) = eval_d(&s.x[..=order], h);
         let e1 = 0.5 * v * v + crate::potential::energy(x);
