@@ -419,9 +419,16 @@ fn at_rest_in_well_two(st: &State, plate: Sinusoid) -> bool {
     if energy >= BARRIER_ENERGY {
         return false;
     }
-    // Lowest turning point in well 2: U(x_min) = energy with ½ < x_min ≤ 1 (bisection).
+    let (_, _, offset) = plate.origin();
+    let plate_top = offset + plate.velocity() / plate.omega();
+    // Lowest turning point in well 2: U(x_min) = energy with ½ < x_min ≤ 1 (bisection). `lo`
+    // only rises and `hi` only falls, so the answer is known once the bracket has left
+    // `plate_top` (the same answer as after all the iterations).
     let (mut lo, mut hi) = (0.5, 1.0);
     for _ in 0..60 {
+        if lo > plate_top || hi <= plate_top {
+            break;
+        }
         let mid = 0.5 * (lo + hi);
         if potential::energy(mid) > energy {
             lo = mid;
@@ -429,8 +436,6 @@ fn at_rest_in_well_two(st: &State, plate: Sinusoid) -> bool {
             hi = mid;
         }
     }
-    let (_, _, offset) = plate.origin();
-    let plate_top = offset + plate.velocity() / plate.omega();
     lo > plate_top
 }
 
