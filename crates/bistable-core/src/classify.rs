@@ -18,7 +18,7 @@ use crate::events::{Event, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER_ENERGY};
 use crate::shaker::Sinusoid;
-use crate::simulator::{SimError, Simulator};
+use crate::simulator::{SimError, Simulator, State};
 
 /// Response class (model.md Sec. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -250,7 +250,7 @@ pub fn classify_from(
         } else if !growth.as_ref().is_some_and(|g| g.live) && !votes.measuring(k + 1) {
             sim.disable_variational();
         }
-        let rest = at_rest_in_well_two(&sim, plate);
+        let rest = at_rest_in_well_two(&st, plate);
         let found = if rest {
             Some((1, true))
         } else {
@@ -486,8 +486,7 @@ const SETTLED: f64 = 1e-12;
 
 /// In well 2, unable to cross the barrier or to reach the plate ever again (energy only decays
 /// without impacts).
-fn at_rest_in_well_two(sim: &Simulator, plate: Sinusoid) -> bool {
-    let st = sim.state();
+fn at_rest_in_well_two(st: &State, plate: Sinusoid) -> bool {
     if st.well != Well::Two || st.mode != crate::ContactMode::Free {
         return false;
     }
@@ -495,9 +494,16 @@ fn at_rest_in_well_two(sim: &Simulator, plate: Sinusoid) -> bool {
     if energy >= BARRIER_ENERGY {
         return false;
     }
-    // Lowest turning point in well 2: U(x_min) = energy with ½ < x_min ≤ 1 (bisection).
+    let (_, _, offset) = plate.origin();
+    let plate_top = offset + plate.velocity() / plate.omega();
+    // Lowest turning point in well 2: U(x_min) = energy with ½ < x_min ≤ 1 (bisection). `lo`
+    // only rises and `hi` only falls, so the answer is known once the bracket has left
+    // `plate_top` (the same answer as after all the iterations).
     let (mut lo, mut hi) = (0.5, 1.0);
     for _ in 0..60 {
+        if lo > plate_top || hi <= plate_top {
+            break;
+        }
         let mid = 0.5 * (lo + hi);
         if potential::energy(mid) > energy {
             lo = mid;
@@ -505,8 +511,6 @@ fn at_rest_in_well_two(sim: &Simulator, plate: Sinusoid) -> bool {
             hi = mid;
         }
     }
-    let (_, _, offset) = plate.origin();
-    let plate_top = offset + plate.velocity() / plate.omega();
     lo > plate_top
 }
 

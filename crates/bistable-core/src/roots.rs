@@ -31,7 +31,8 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
     if quadratic_min(d[0], d[1], if n >= 2 { d[2] } else { 0.0 }) + tail > 0.0 {
         return None;
     }
-    search(c, h, &bernstein(&d[..=n])[..=n], 0.0, 1.0)
+    bernstein(&mut d[..=n]);
+    search(c, h, &d[..=n], 0.0, 1.0)
 }
 
 /// Depth-first search of `[a, a + w]` (in units of the step) whose Bernstein coefficients are `b`,
@@ -73,46 +74,74 @@ fn quadratic_min(a: f64, b: f64, c: f64) -> f64 {
     }
 }
 
-/// Bernstein coefficients of `Σ d_k σ^k` on `[0, 1]`: `b_i = Σ_{k≤i} C(i,k) d_k/C(n,k)`, by the
-/// additive triangle (pass `j` adds each coefficient's left neighbour for `i ≥ j`).
-fn bernstein(d: &[f64]) -> [f64; BUF] {
+/// Bernstein coefficients of `Σ d_k σ^k` on `[0, 1]`, in place: `b_i = Σ_{k≤i} C(i,k) d_k/C(n,k)`,
+/// by the additive triangle (pass `j` adds each coefficient's left neighbour for `i ≥ j`).
+fn bernstein(d: &mut [f64]) {
     let n = d.len() - 1;
-    let mut b = [0.0; BUF];
-    // 1/C(n,k), updated along k.
-    let mut inv_cnk = 1.0;
-    for (k, (bk, &dk)) in b.iter_mut().zip(d).enumerate() {
-        if k > 0 {
-            inv_cnk *= k as f64 / (n + 1 - k) as f64;
-        }
-        *bk = dk * inv_cnk;
+    for (dk, &inv) in d.iter_mut().zip(&INV_BINOM[n]) {
+        *dk *= inv;
     }
-    for j in 1..=n {
-        // Ascending with the old left neighbour carried in a register (no chain through memory).
-        let mut left = b[j - 1];
-        for bi in &mut b[j..=n] {
-            let old = *bi;
-            *bi = old + left;
-            left = old;
+    // Passes j and j + 1 together: for i > j, (b_i + b_{i−1}) + (b_{i−1} + b_{i−2}) from the
+    // old values, descending (in blocks of four) so that these are still the old ones.
+    let mut j = 1;
+    while j < n {
+        let mut end = n + 1;
+        while end >= j + 5 {
+            let w = &mut d[end - 6..end];
+            let t = [
+                w[1] + w[0],
+                w[2] + w[1],
+                w[3] + w[2],
+                w[4] + w[3],
+                w[5] + w[4],
+            ];
+            let new = [t[1] + t[0], t[2] + t[1], t[3] + t[2], t[4] + t[3]];
+            w[2..].copy_from_slice(&new);
+            end -= 4;
         }
+        for i in (j + 1..end).rev() {
+            d[i] = (d[i] + d[i - 1]) + (d[i - 1] + d[i - 2]);
+        }
+        d[j] += d[j - 1];
+        j += 2;
     }
-    b
+    if j == n {
+        d[n] += d[n - 1];
+    }
 }
+
+/// `INV_BINOM[n][k] = 1/C(n,k)` for `k ≤ n`, as the running product `Π_{i≤k} i/(n+1−i)`.
+static INV_BINOM: [[f64; BUF]; BUF] = {
+    let mut t = [[0.0; BUF]; BUF];
+    let mut n = 0;
+    while n < BUF {
+        let mut inv = 1.0;
+        t[n][0] = inv;
+        let mut k = 1;
+        while k <= n {
+            inv *= k as f64 / (n + 1 - k) as f64;
+            t[n][k] = inv;
+            k += 1;
+        }
+        n += 1;
+    }
+    t
+};
 
 /// De Casteljau split of a Bernstein polynomial at the midpoint.
 fn split(b: &[f64]) -> ([f64; BUF], [f64; BUF]) {
     let n = b.len() - 1;
-    let mut work = [0.0; BUF];
-    work[..=n].copy_from_slice(b);
-    let mut left = [0.0; BUF];
+    // Pass r averages neighbours in 0..=n − r, which leaves the right half's r-th coefficient
+    // (index n − r) final: the work array ends as the right half.
     let mut right = [0.0; BUF];
-    left[0] = work[0];
-    right[n] = work[n];
-    for r in 1..=n {
+    right[..=n].copy_from_slice(b);
+    let mut left = [0.0; BUF];
+    left[0] = right[0];
+    for (r, l) in (1..=n).zip(&mut left[1..]) {
         for i in 0..=n - r {
-            work[i] = 0.5 * (work[i] + work[i + 1]);
+            right[i] = 0.5 * (right[i] + right[i + 1]);
         }
-        left[r] = work[0];
-        right[n - r] = work[n - r];
+        *l = right[0];
     }
     (left, right)
 }
@@ -262,7 +291,8 @@ mod tests {
     #[test]
     fn bernstein_matches_definition() {
         let d = [0.3, -1.2, 0.7, 2.5, -0.4];
-        let b = bernstein(&d);
+        let mut b = d;
+        bernstein(&mut b);
         let binom =
             |n: u64, k: u64| -> f64 { (1..=k).map(|j| (n + 1 - j) as f64 / j as f64).product() };
         for i in 0..5u64 {

@@ -4,6 +4,7 @@
 //! of each step; both kinds provide them exactly (up to rounding).
 
 use crate::params::{check, ParamError};
+use crate::taylor::BUF;
 use crate::time::Instant;
 
 /// Highest polynomial degree accepted for an external plate piece.
@@ -97,27 +98,46 @@ impl Sinusoid {
 
     /// Phase in cycles, in `[0, 1)` (the paper's `φ/2π`, Eq. 12).
     pub fn phase_cycles(&self, t: Instant) -> f64 {
-        let c = self.angle(t) / std::f64::consts::TAU;
-        let c = if c < 0.0 { c + 1.0 } else { c };
-        if c >= 1.0 {
-            0.0
-        } else {
-            c
-        }
+        cycles(self.angle(t))
     }
 
     fn series(&self, t: Instant, out: &mut [f64]) {
+        self.magnitudes(out);
         let (s, c) = self.angle(t).sin_cos();
-        // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
-        let cycle = [s, c, -s, -c];
+        self.scale_by_phase(s, c, out);
+    }
+
+    /// Magnitudes `(V/Ω) Ω^k/k!` of the series coefficients: the part that does not depend on
+    /// time.
+    fn magnitudes(&self, out: &mut [f64]) {
         let mut a = self.velocity / self.omega;
         for (k, o) in out.iter_mut().enumerate() {
             if k > 0 {
                 a *= self.omega / k as f64;
             }
-            *o = a * cycle[k % 4];
+            *o = a;
+        }
+    }
+
+    /// The series from its magnitudes in `out` and the sine and cosine of the phase angle.
+    fn scale_by_phase(&self, s: f64, c: f64, out: &mut [f64]) {
+        // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
+        let cycle = [s, c, -s, -c];
+        for (k, o) in out.iter_mut().enumerate() {
+            *o *= cycle[k % 4];
         }
         out[0] += self.offset;
+    }
+}
+
+/// A phase angle in `[−π, π)` in cycles, in `[0, 1)`.
+fn cycles(angle: f64) -> f64 {
+    let c = angle / std::f64::consts::TAU;
+    let c = if c < 0.0 { c + 1.0 } else { c };
+    if c >= 1.0 {
+        0.0
+    } else {
+        c
     }
 }
 
@@ -260,6 +280,74 @@ impl PlateMotion {
     pub fn phase_cycles(&self, t: Instant) -> Option<f64> {
         match self {
             PlateMotion::Sinusoid(s) => Some(s.phase_cycles(t)),
+            PlateMotion::Poly(_) => None,
+        }
+    }
+}
+
+/// [`PlateMotion::series`], [`PlateMotion::motion`] and [`PlateMotion::phase_cycles`] (the same
+/// values) with the work that repeats done once: a sinusoid's coefficient magnitudes, and its
+/// phase angle with sine and cosine at the last instant asked (an impact and the step from it).
+#[derive(Clone)]
+pub(crate) struct PlateEval {
+    plate: PlateMotion,
+    mags: [f64; BUF],
+    /// `(hi, lo)` bits of the instant, angle, sine, cosine.
+    last: Option<((u64, u64), f64, f64, f64)>,
+}
+
+impl PlateEval {
+    /// Evaluation of `plate`, nothing cached yet but the magnitudes.
+    pub(crate) fn new(plate: PlateMotion) -> Self {
+        let mut mags = [0.0; BUF];
+        if let PlateMotion::Sinusoid(s) = &plate {
+            s.magnitudes(&mut mags);
+        }
+        Self {
+            plate,
+            mags,
+            last: None,
+        }
+    }
+
+    /// Angle, sine and cosine of the sinusoid's phase at `t`.
+    fn trig(&mut self, s: &Sinusoid, t: Instant) -> (f64, f64, f64) {
+        let (hi, lo) = t.parts();
+        let key = (hi.to_bits(), lo.to_bits());
+        match self.last {
+            Some((k, a, sn, cs)) if k == key => (a, sn, cs),
+            _ => {
+                let a = s.angle(t);
+                let (sn, cs) = a.sin_cos();
+                self.last = Some((key, a, sn, cs));
+                (a, sn, cs)
+            }
+        }
+    }
+
+    /// [`PlateMotion::series`]; `out` is at most `BUF` long.
+    pub(crate) fn series(&mut self, t: Instant, out: &mut [f64]) {
+        match self.plate {
+            PlateMotion::Sinusoid(s) => {
+                let (_, sn, cs) = self.trig(&s, t);
+                out.copy_from_slice(&self.mags[..out.len()]);
+                s.scale_by_phase(sn, cs, out);
+            }
+            PlateMotion::Poly(p) => p.series(t, out),
+        }
+    }
+
+    /// [`PlateMotion::motion`].
+    pub(crate) fn motion(&mut self, t: Instant) -> (f64, f64, f64) {
+        let mut c = [0.0; 3];
+        self.series(t, &mut c);
+        (c[0], c[1], 2.0 * c[2])
+    }
+
+    /// [`PlateMotion::phase_cycles`].
+    pub(crate) fn phase_cycles(&mut self, t: Instant) -> Option<f64> {
+        match self.plate {
+            PlateMotion::Sinusoid(s) => Some(cycles(self.trig(&s, t).0)),
             PlateMotion::Poly(_) => None,
         }
     }

@@ -15,9 +15,9 @@ use crate::events::{ContactMode, Event, Impact, StickCause, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
 use crate::roots::first_root;
-use crate::shaker::PlateMotion;
 #[cfg(doc)]
 use crate::shaker::Sinusoid;
+use crate::shaker::{PlateEval, PlateMotion};
 use crate::taylor::{self, eval, eval_d, FlightSeries, BUF};
 use crate::time::Instant;
 
@@ -238,7 +238,11 @@ pub struct Simulator {
     params: Params,
     opts: SolverOptions,
     plate: PlateMotion,
+    /// `plate`, evaluated with the work that repeats done once.
+    plate_eval: PlateEval,
     order: usize,
+    /// `opts.tol().ln()`.
+    ln_tol: f64,
     /// Start of the current step and the state there.
     t0: Instant,
     mode: ContactMode,
@@ -338,8 +342,10 @@ impl Simulator {
         Self {
             params,
             opts,
+            plate_eval: PlateEval::new(plate),
             plate,
             order: opts.order(),
+            ln_tol: opts.tol().ln(),
             t0,
             mode: ContactMode::Free,
             u0,
@@ -529,6 +535,7 @@ impl Simulator {
             });
         }
         self.plate = plate;
+        self.plate_eval = PlateEval::new(plate);
         self.restart_at_now(&st, z, zd);
         Ok(())
     }
@@ -737,7 +744,7 @@ impl Simulator {
     fn compute_step(&mut self) -> Result<(), SimError> {
         let p = self.order;
         let mut z = [0.0; BUF];
-        self.plate.series(self.t0, &mut z[..p + 3]);
+        self.plate_eval.series(self.t0, &mut z[..p + 3]);
         let room = self
             .plate
             .horizon()
@@ -746,6 +753,7 @@ impl Simulator {
             t: self.t0.to_f64(),
         };
         let tol = self.opts.tol();
+        let ln_tol = self.ln_tol;
         let zeta = self.params.zeta();
         let step = &mut self.step;
         step.len = 0.0;
@@ -787,7 +795,7 @@ impl Simulator {
                     let [dx, dv] = v.phi;
                     v.cols = taylor::variation(zeta, s, p, [[dx[0], dv[0]], [dx[1], dv[1]]]);
                 }
-                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol).min(room);
+                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol, ln_tol).min(room);
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
@@ -819,7 +827,7 @@ impl Simulator {
                     };
                     return Ok(());
                 }
-                let h = taylor::step_size(&[&z[..=p], n], p, tol).min(room);
+                let h = taylor::step_size(&[&z[..=p], n], p, tol, ln_tol).min(room);
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
@@ -858,7 +866,7 @@ impl Simulator {
                     self.w0 = 0.0;
                     // Gap, its rate and (at a root of N) its curvature vanish.
                     self.pinned = if at_root { 3 } else { 2 };
-                    let (z, zd, _) = self.plate.motion(t1);
+                    let (z, zd, _) = self.plate_eval.motion(t1);
                     obs.event(&Event::StickEnd {
                         t: t1.to_f64(),
                         x: z,
@@ -902,8 +910,8 @@ impl Simulator {
         self.on_barrier = true;
         self.stats.snap_throughs += 1;
         let v = match self.mode {
-            ContactMode::Free => self.w0 + self.plate.motion(t1).1,
-            ContactMode::Sticking => self.plate.motion(t1).1,
+            ContactMode::Free => self.w0 + self.plate_eval.motion(t1).1,
+            ContactMode::Sticking => self.plate_eval.motion(t1).1,
         };
         obs.event(&Event::SnapThrough {
             t: t1.to_f64(),
@@ -930,7 +938,7 @@ impl Simulator {
         self.short_flights = 0;
         obs.event(&Event::StickStart {
             t: t1.to_f64(),
-            x: self.plate.motion(t1).0,
+            x: self.plate_eval.motion(t1).0,
             cause,
             impacts: self.stats.impacts,
         })
@@ -944,14 +952,14 @@ impl Simulator {
         obs: &mut impl Observer,
     ) -> Result<ControlFlow<()>, SimError> {
         let e = self.params.restitution();
-        let (z, zd, zdd) = self.plate.motion(t1);
+        let (z, zd, zdd) = self.plate_eval.motion(t1);
         let w_plus = self.params.rebound(w_minus);
         let v_before = w_minus + zd;
         let v_after = w_plus + zd;
         let imp = Impact {
             index: self.stats.impacts,
             t: t1.to_f64(),
-            phase: self.plate.phase_cycles(t1),
+            phase: self.plate_eval.phase_cycles(t1),
             x: z,
             v_before,
             v_after,

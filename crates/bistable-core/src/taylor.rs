@@ -63,14 +63,22 @@ pub(crate) fn flight(
     xr[R - 1] = xp[1];
     xp[order + 2..order + 5].iter_mut().for_each(|c| *c = 0.0);
     let three_minus_2x0 = 3.0 - 2.0 * xp[0];
+    // The newest values, x_k, x_{k+1} and sq[k − 1], are taken from registers: a load of a value
+    // stored just before (above all a vector load across it) would wait for the store.
+    let (mut x_k, mut x_k1) = (xp[0], xp[1]);
+    let mut sq_prev = 0.0;
     for k in 0..order {
         let len = (k + 4) & !3;
         let rev = &xr[R - k..R - k + len];
         // Off the critical path: the linear terms and the cube's products with older squares
         // (sq[k] is still zero here, so its term s·x_0 is folded in below and the vector loads
         // never wait for a value stored just before).
-        let lin = -2.0 * zeta * (k + 1) as f64 * xp[k + 1] - xp[k];
-        let c_old = dot4(&sq[..len], rev);
+        let lin = -2.0 * zeta * (k + 1) as f64 * x_k1 - x_k;
+        let c_old = if k == 0 {
+            dot4(&sq[..len], rev)
+        } else {
+            dot4_newest(&sq[..len], rev, k - 1, sq_prev)
+        };
         // Square by symmetry: twice the pairs j < k − j, plus the middle term.
         let half = k.div_ceil(2);
         let mut s = 2.0 * dot_exact(&xp[..half], &rev[..half]);
@@ -78,12 +86,14 @@ pub(crate) fn flight(
             s += xp[k / 2] * xp[k / 2];
         }
         sq[k] = s;
+        sq_prev = s;
         // rhs = lin + 3s − 2(c_old + s·x_0)
         let rhs = (lin - 2.0 * c_old) + s * three_minus_2x0;
         let xk2 = rhs * INV_PAIR[k];
         xp[k + 2] = xk2;
         xr[R - k - 2] = xk2;
         u[k + 2] = xk2 - z[k + 2];
+        (x_k, x_k1) = (x_k1, xk2);
     }
 }
 
@@ -128,6 +138,41 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
     for (x, y) in a.iter().zip(b) {
         for i in 0..4 {
             acc[i] += x[i] * y[i];
+        }
+    }
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// [`dot4`] for `a` whose entry `at` is `newest` (passed in a register) and zero past it: the
+/// chunk holding it is assembled lane by lane, the same products in the same order.
+#[inline]
+fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
+    let q = at / 4;
+    let (a, _) = a.as_chunks::<4>();
+    let (b, _) = b.as_chunks::<4>();
+    let mut acc = [0.0; 4];
+    for (x, y) in a[..q].iter().zip(&b[..q]) {
+        for i in 0..4 {
+            acc[i] += x[i] * y[i];
+        }
+    }
+    let m = &a[q];
+    let y = &b[q];
+    // Lane by lane: entries before `at` (stored iterations ago), `newest`, zeros.
+    let lane = at % 4;
+    for i in 0..4 {
+        let x = if i < lane {
+            m[i]
+        } else if i == lane {
+            newest
+        } else {
+            0.0
+        };
+        acc[i] += x * y[i];
+    }
+    for y in &b[q + 1..] {
+        for i in 0..4 {
+            acc[i] += 0.0 * y[i];
         }
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
@@ -193,8 +238,9 @@ pub(crate) fn contact_force(zeta: f64, z: &[f64; BUF], order: usize) -> [f64; BU
 }
 
 /// Jorba–Zou step size from the last two coefficients of the given series (each a slice of
-/// coefficients `0..=order`), for an absolute tolerance scaled by the size of the state.
-pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64) -> f64 {
+/// coefficients `0..=order`), for an absolute tolerance scaled by the size of the state
+/// (`ln_tol`: `tol.ln()`, the log of the tolerance when that size is at most 1).
+pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64, ln_tol: f64) -> f64 {
     let scale = series
         .iter()
         .map(|c| c[0].abs().max(c[1].abs()))
@@ -206,7 +252,7 @@ pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64) -> f64 {
         .map(|c| c[order - 1].abs())
         .fold(0.0, f64::max);
     // min((ε/prev)^(1/(p−1)), (ε/last)^(1/p)) times the safety factor e^(−0.7/(p−1)), in logs.
-    let ln_eps = eps.ln();
+    let ln_eps = if scale == 1.0 { ln_tol } else { eps.ln() };
     let l1 = (ln_eps - prev.ln() - 0.7) / (order - 1) as f64;
     let l2 = (ln_eps - last.ln()) / order as f64 - 0.7 / (order - 1) as f64;
     l1.min(l2).exp().min(MAX_STEP)
@@ -260,7 +306,7 @@ mod tests {
         let order = 24;
         let mut s = FlightSeries::default();
         flight(0.0, 0.3, 0.2, &z, order, &mut s);
-        let h = step_size(&[&s.x[..=order]], order, 1e-16);
+        let h = step_size(&[&s.x[..=order]], order, 1e-16, 1e-16_f64.ln());
         let e0 = 0.5 * 0.2 * 0.2 + crate::potential::energy(0.3);
         let (x, v) = eval_d(&s.x[..=order], h);
         let e1 = 0.5 * v * v + crate::potential::energy(x);
