@@ -173,8 +173,9 @@ pub struct Tracking {
     pub track_periods: u64,
     /// For an aperiodic response, this many further Lyapunov windows of `lyapunov_periods`
     /// besides the one after the run that decides `chaotic` ([`Classification::chaos_votes`]):
-    /// the last stretches of the run itself (as many as fit in it), measured alongside it, so
-    /// they cost no further integration.
+    /// the last stretches of the run itself, as many as fit in its last quarter (on the
+    /// attractor, past the transient), measured alongside it, so they cost no further
+    /// integration.
     pub extra_windows: u32,
     /// Skip the Lyapunov exponent of an aperiodic response (`lyapunov` is then `None` and
     /// `chaotic` false): for runs that only ask whether a period is reached.
@@ -390,11 +391,11 @@ struct Votes {
 
 impl Votes {
     /// `wanted` windows of `len` sections at the end of a run of `run` sections, as many as fit
-    /// after its first two sections (none when `measure` is false).
+    /// in its last quarter and after its first two sections (none when `measure` is false).
     fn new(wanted: u32, len: u32, run: u64, measure: bool) -> Self {
         let len = u64::from(len.max(1));
         let n = if measure {
-            u64::from(wanted).min(run.saturating_sub(2) / len)
+            u64::from(wanted).min((run / 4).min(run.saturating_sub(2)) / len)
         } else {
             0
         };

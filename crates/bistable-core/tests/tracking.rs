@@ -81,8 +81,9 @@ fn tracking_leaves_the_classification_unchanged() {
     }
 }
 
-/// The further Lyapunov windows are the last stretches of the run itself: as many as fit, each
-/// a verdict that agrees with the exponent's sign where the dynamics leaves no doubt.
+/// The further Lyapunov windows are the last stretches of the run itself: as many as fit in its
+/// last quarter, each a verdict that agrees with the exponent's sign where the dynamics leaves
+/// no doubt.
 #[test]
 fn window_votes_come_from_the_end_of_the_run() {
     let votes = |w: f64, v: f64, periods: f64, max_period: u32, windows: u32| {
@@ -109,12 +110,13 @@ fn window_votes_come_from_the_end_of_the_run() {
         assert_eq!(t.period, None, "({w}, {v}) must run to the end");
         t.chaos_votes.unwrap()
     };
-    // Chaos (λ = 0.177 over long runs): every window is chaotic.
-    assert_eq!(votes(2.45, 0.07, 3_000.0, 16, 8), (8, 8));
+    // Chaos (λ = 0.177 over long runs): every window is chaotic. 5,000 natural periods at
+    // Ω = 2.45 are 12,250 sections, whose last quarter holds 10 windows of 300.
+    assert_eq!(votes(2.45, 0.07, 5_000.0, 16, 8), (8, 8));
     // The stable P-2 orbit at Ω = 2.2 with only period 1 looked for runs to the end; its
     // windows contract (Floquet multipliers inside the unit circle): none is chaotic.
-    assert_eq!(votes(2.2, 0.07, 3_000.0, 1, 8), (0, 8));
-    // 1,000 natural periods at Ω = 2.45 are 2,450 sections: 8 windows of 300 fit, 9 do not
-    // (the first two sections are never part of a window).
-    assert_eq!(votes(2.45, 0.07, 1_000.0, 16, 64).1, 8);
+    assert_eq!(votes(2.2, 0.07, 5_000.0, 1, 8), (0, 8));
+    // 4,000 natural periods at Ω = 2.45 are 9,800 sections: 8 windows of 300 fit in the last
+    // quarter (2,450 sections), 9 do not.
+    assert_eq!(votes(2.45, 0.07, 4_000.0, 16, 64).1, 8);
 }
