@@ -43,11 +43,11 @@ natural periods), when it was decided later than that, or when it is still
 aperiodic at the end: --repeats runs (tol x10, x100, and starts displaced by
 --perturbation; those of an aperiodic run last --repeat-periods natural
 periods), and for an aperiodic run --lyapunov-windows further Lyapunov windows,
-the last stretches of the run itself, each a verdict on 'chaotic'. The point is
-'sensitive' when these do not all agree (class, period, chaos, final well); the
-reported result is the most frequent outcome. Points decided early stay a single
-run; a chaotic attractor that every run reaches and keeps is 'chaotic', not
-sensitive. See docs/sensitivity.md.
+the last stretches of the run itself (in its last quarter), each a verdict on
+'chaotic'. The point is 'sensitive' when these do not all agree (class, period,
+chaos, final well); the reported result is the most frequent outcome. Points
+decided early stay a single run; a chaotic attractor that every run reaches and
+keeps is 'chaotic', not sensitive. See docs/sensitivity.md.
 
 Always prints one JSON object (--json is accepted and changes nothing):
   class, period, chaotic, lyapunov, snap_throughs, final_well (1 | 2),
@@ -125,7 +125,8 @@ pub struct ClassifyArgs {
     pub repeat_periods: f64,
 
     /// Sensitivity test: further Lyapunov windows of an aperiodic run, each a verdict on
-    /// 'chaotic': the last stretches of the run itself, as many as fit (0..=1024).
+    /// 'chaotic': the last stretches of the run itself, as many as fit in its last quarter
+    /// (0..=1024).
     #[arg(long, value_name = "N", default_value_t = SensitivityOptions::default().windows)]
     pub lyapunov_windows: u32,
 }

@@ -728,13 +728,19 @@ fn legend_panel(
         (46, y - 1),
         plot::left(text(15)),
     ))?;
+    let note = RGBColor(90, 90, 90);
     area.draw(&Text::new(
         format!(
-            "{sensitive} points ({:.1}%), colour of the most frequent",
+            "{sensitive} points ({:.1}%), in the colour",
             100.0 * sensitive as f64 / n.max(1) as f64
         ),
         (46, y + 17),
-        plot::left(text(13).color(&RGBColor(90, 90, 90))),
+        plot::left(text(13).color(&note)),
+    ))?;
+    area.draw(&Text::new(
+        "of their most frequent outcome",
+        (46, y + 33),
+        plot::left(text(13).color(&note)),
     ))?;
     Ok(())
 }
