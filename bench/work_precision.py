@@ -517,7 +517,15 @@ def write_markdown(results: dict, path: Path, command: str) -> None:
     kept = []
     if path.exists():
         section = None
+        fenced = False
         for line in path.read_text().splitlines():
+            if line.startswith("```"):
+                fenced = not fenced
+            if fenced or line.startswith("```"):
+                # Inside a code block a line starting with "#" is a comment, not a heading.
+                if section is not None:
+                    section.append(line)
+                continue
             if line.startswith("## "):
                 section = [] if line not in ours_titles else None
                 if section is not None:
