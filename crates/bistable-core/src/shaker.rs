@@ -310,6 +310,11 @@ impl PlateEval {
         }
     }
 
+    /// The plate motion evaluated.
+    pub(crate) fn law(&self) -> &PlateMotion {
+        &self.plate
+    }
+
     /// Angle, sine and cosine of the sinusoid's phase at `t`.
     fn trig(&mut self, s: &Sinusoid, t: Instant) -> (f64, f64, f64) {
         let (hi, lo) = t.parts();

@@ -237,9 +237,8 @@ struct Step {
 pub struct Simulator {
     params: Params,
     opts: SolverOptions,
-    plate: PlateMotion,
-    /// `plate`, evaluated with the work that repeats done once.
-    plate_eval: PlateEval,
+    /// The plate motion, with the work that repeats in evaluating it done once.
+    plate: PlateEval,
     order: usize,
     /// `opts.tol().ln()`.
     ln_tol: f64,
@@ -342,8 +341,7 @@ impl Simulator {
         Self {
             params,
             opts,
-            plate_eval: PlateEval::new(plate),
-            plate,
+            plate: PlateEval::new(plate),
             order: opts.order(),
             ln_tol: opts.tol().ln(),
             t0,
@@ -381,7 +379,7 @@ impl Simulator {
 
     /// Current plate motion.
     pub fn plate(&self) -> &PlateMotion {
-        &self.plate
+        self.plate.law()
     }
 
     /// Taylor order in use.
@@ -412,7 +410,7 @@ impl Simulator {
     /// State at the current time.
     pub fn state(&self) -> State {
         let s = self.now.since(self.t0);
-        let (z, zdot, _) = self.plate.motion(self.now);
+        let (z, zdot, _) = self.plate.law().motion(self.now);
         let riding = if self.live {
             self.step.riding
         } else {
@@ -465,7 +463,7 @@ impl Simulator {
                 requested: t,
             });
         }
-        if let Some(h) = self.plate.horizon() {
+        if let Some(h) = self.plate.law().horizon() {
             if h < target {
                 return Err(SimError::BeyondPlate {
                     horizon: h.to_f64(),
@@ -484,7 +482,7 @@ impl Simulator {
                     len: self.step.len,
                     riding: self.step.riding,
                     x: &self.step.series.x[..=self.order + 1],
-                    plate: &self.plate,
+                    plate: self.plate.law(),
                 });
             }
             let (len, end) = (self.step.len, self.step.end);
@@ -534,8 +532,7 @@ impl Simulator {
                 to: z,
             });
         }
-        self.plate = plate;
-        self.plate_eval = PlateEval::new(plate);
+        self.plate = PlateEval::new(plate);
         self.restart_at_now(&st, z, zd);
         Ok(())
     }
@@ -662,6 +659,7 @@ impl Simulator {
     pub fn set_sinusoid(&mut self, omega: f64, velocity: f64) -> Result<(), SimError> {
         let s = self
             .plate
+            .law()
             .continued_by_sinusoid(self.now, omega, velocity)?;
         self.set_plate(s.into())
     }
@@ -679,7 +677,7 @@ impl Simulator {
             order: self.order,
             chatter: self.opts.chatter(),
             max_chatter_impacts: self.opts.max_chatter_impacts(),
-            plate: PlateRecord::of(&self.plate),
+            plate: PlateRecord::of(self.plate.law()),
             t0: self.t0.parts(),
             mode: self.mode,
             u0: self.u0,
@@ -744,9 +742,10 @@ impl Simulator {
     fn compute_step(&mut self) -> Result<(), SimError> {
         let p = self.order;
         let mut z = [0.0; BUF];
-        self.plate_eval.series(self.t0, &mut z[..p + 3]);
+        self.plate.series(self.t0, &mut z[..p + 3]);
         let room = self
             .plate
+            .law()
             .horizon()
             .map_or(f64::INFINITY, |h| h.since(self.t0).max(0.0));
         let nonfinite = SimError::NonFinite {
@@ -866,7 +865,7 @@ impl Simulator {
                     self.w0 = 0.0;
                     // Gap, its rate and (at a root of N) its curvature vanish.
                     self.pinned = if at_root { 3 } else { 2 };
-                    let (z, zd, _) = self.plate_eval.motion(t1);
+                    let (z, zd, _) = self.plate.motion(t1);
                     obs.event(&Event::StickEnd {
                         t: t1.to_f64(),
                         x: z,
@@ -910,8 +909,8 @@ impl Simulator {
         self.on_barrier = true;
         self.stats.snap_throughs += 1;
         let v = match self.mode {
-            ContactMode::Free => self.w0 + self.plate_eval.motion(t1).1,
-            ContactMode::Sticking => self.plate_eval.motion(t1).1,
+            ContactMode::Free => self.w0 + self.plate.motion(t1).1,
+            ContactMode::Sticking => self.plate.motion(t1).1,
         };
         obs.event(&Event::SnapThrough {
             t: t1.to_f64(),
@@ -938,7 +937,7 @@ impl Simulator {
         self.short_flights = 0;
         obs.event(&Event::StickStart {
             t: t1.to_f64(),
-            x: self.plate_eval.motion(t1).0,
+            x: self.plate.motion(t1).0,
             cause,
             impacts: self.stats.impacts,
         })
@@ -952,14 +951,14 @@ impl Simulator {
         obs: &mut impl Observer,
     ) -> Result<ControlFlow<()>, SimError> {
         let e = self.params.restitution();
-        let (z, zd, zdd) = self.plate_eval.motion(t1);
+        let (z, zd, zdd) = self.plate.motion(t1);
         let w_plus = self.params.rebound(w_minus);
         let v_before = w_minus + zd;
         let v_after = w_plus + zd;
         let imp = Impact {
             index: self.stats.impacts,
             t: t1.to_f64(),
-            phase: self.plate_eval.phase_cycles(t1),
+            phase: self.plate.phase_cycles(t1),
             x: z,
             v_before,
             v_after,
