@@ -4,7 +4,8 @@
 //! (the variation is reseeded without restarting a step), chaos, rest and periodic orbits.
 
 use bistable_core::{
-    classify, classify_from, ClassifyOptions, Params, Sinusoid, SolverOptions, Tracking,
+    classify, classify_from, Classification, ClassifyOptions, Params, Sinusoid, SolverOptions,
+    Tracking,
 };
 
 #[test]
@@ -43,17 +44,9 @@ fn tracking_leaves_the_classification_unchanged() {
                 no_lyapunov: false,
             },
         ] {
-            let t = classify_from(
-                Params::paper(),
-                plate,
-                SolverOptions::default(),
-                co,
-                (0.0, 0.0),
-                track,
-            )
-            .unwrap();
+            let t = tracked(plate, co, track);
             assert!(t.transient_efoldings.is_some(), "({w}, {v})");
-            let strip = |mut c: bistable_core::Classification| {
+            let strip = |mut c: Classification| {
                 c.transient_efoldings = None;
                 c.chaos_votes = None;
                 c
@@ -61,19 +54,12 @@ fn tracking_leaves_the_classification_unchanged() {
             assert_eq!(strip(t), strip(plain), "({w}, {v}) {track:?}");
         }
         if plain.period.is_none() {
-            let t = classify_from(
-                Params::paper(),
-                plate,
-                SolverOptions::default(),
-                co,
-                (0.0, 0.0),
-                Tracking {
-                    extra_windows: 3,
-                    efoldings_cap: Some(20.0),
-                    ..Tracking::default()
-                },
-            )
-            .unwrap();
+            let track = Tracking {
+                extra_windows: 3,
+                efoldings_cap: Some(20.0),
+                ..Tracking::default()
+            };
+            let t = tracked(plate, co, track);
             let (chaotic, n) = t.chaos_votes.unwrap();
             assert_eq!(n, 3);
             assert!(chaotic <= n);
@@ -97,16 +83,7 @@ fn window_votes_come_from_the_end_of_the_run() {
             extra_windows: windows,
             ..Tracking::default()
         };
-        let plate = Sinusoid::new(w, v).unwrap();
-        let t = classify_from(
-            Params::paper(),
-            plate,
-            SolverOptions::default(),
-            co,
-            (0.0, 0.0),
-            track,
-        )
-        .unwrap();
+        let t = tracked(Sinusoid::new(w, v).unwrap(), co, track);
         assert_eq!(t.period, None, "({w}, {v}) must run to the end");
         t.chaos_votes.unwrap()
     };
@@ -119,4 +96,17 @@ fn window_votes_come_from_the_end_of_the_run() {
     // 4,000 natural periods at Ω = 2.45 are 9,800 sections: 8 windows of 300 fit in the last
     // quarter (2,450 sections), 9 do not.
     assert_eq!(votes(2.45, 0.07, 4_000.0, 16, 64).1, 8);
+}
+
+/// The paper's point classified from rest with the default solver, measuring what `track` asks.
+fn tracked(plate: Sinusoid, co: ClassifyOptions, track: Tracking) -> Classification {
+    classify_from(
+        Params::paper(),
+        plate,
+        SolverOptions::default(),
+        co,
+        (0.0, 0.0),
+        track,
+    )
+    .unwrap()
 }
