@@ -18,7 +18,7 @@ use crate::roots::first_root;
 #[cfg(doc)]
 use crate::shaker::Sinusoid;
 use crate::shaker::{PlateEval, PlateMotion};
-use crate::taylor::{self, eval, eval_d, FlightSeries, BUF};
+use crate::taylor::{self, eval, eval_d, FlightSeries, VariationSeries, BUF};
 use crate::time::Instant;
 
 /// Why a run could not go on. The simulator stays usable at its last consistent state.
@@ -270,7 +270,7 @@ pub struct Simulator {
 #[derive(Clone)]
 struct Variational {
     phi: [[f64; 2]; 2],
-    cols: [[f64; BUF]; 2],
+    cols: VariationSeries,
     /// Set `phi = I` at the start of the next step (see `Simulator::reseed_variational`).
     reseed: bool,
 }
@@ -570,7 +570,7 @@ impl Simulator {
         let st = self.state();
         self.var = Some(Variational {
             phi: [[1.0, 0.0], [0.0, 1.0]],
-            cols: [[0.0; BUF]; 2],
+            cols: VariationSeries::default(),
             reseed: false,
         });
         self.restart_at_now(&st, st.z, st.zdot);
@@ -586,7 +586,7 @@ impl Simulator {
         if !self.live && self.now == self.t0 {
             self.var = Some(Variational {
                 phi: [[1.0, 0.0], [0.0, 1.0]],
-                cols: [[0.0; BUF]; 2],
+                cols: VariationSeries::default(),
                 reseed: false,
             });
         } else {
@@ -601,7 +601,7 @@ impl Simulator {
         if self.var.is_none() {
             self.var = Some(Variational {
                 phi: [[0.0; 2]; 2],
-                cols: [[0.0; BUF]; 2],
+                cols: VariationSeries::default(),
                 reseed: true,
             });
         }
@@ -633,9 +633,7 @@ impl Simulator {
             });
         }
         let q = self.order + 1;
-        let (a, da) = eval_d(&v.cols[0][..=q], s);
-        let (b, db) = eval_d(&v.cols[1][..=q], s);
-        Some([[a, b], [da, db]])
+        Some(v.cols.phi_at(q, s))
     }
 
     /// Divides `Φ` by its largest entry (in magnitude) and returns the natural log of that
@@ -649,7 +647,7 @@ impl Simulator {
         let v = self.var.as_mut()?;
         let r = 1.0 / norm;
         v.phi.iter_mut().flatten().for_each(|c| *c *= r);
-        v.cols.iter_mut().flatten().for_each(|c| *c *= r);
+        v.cols.scale(r);
         Some(norm.ln())
     }
 
@@ -760,7 +758,29 @@ impl Simulator {
             ContactMode::Free => {
                 step.riding = false;
                 let s = &mut step.series;
-                taylor::flight(zeta, self.u0, self.w0, &z, p, s);
+                // With the variational equations, their series is computed in the same pass
+                // (from Φ = I if a reseed is pending; the reseed is taken only if the step
+                // goes on).
+                match self.var.as_mut() {
+                    Some(v) => {
+                        let phi = if v.reseed {
+                            [[1.0, 0.0], [0.0, 1.0]]
+                        } else {
+                            v.phi
+                        };
+                        v.cols.start(phi);
+                        taylor::flight_with_variation(
+                            zeta,
+                            self.u0,
+                            self.w0,
+                            &z,
+                            p,
+                            s,
+                            &mut v.cols,
+                        );
+                    }
+                    None => taylor::flight(zeta, self.u0, self.w0, &z, p, s),
+                }
                 if !s.x[..=p + 1].iter().all(|c| c.is_finite()) {
                     return Err(nonfinite);
                 }
@@ -791,8 +811,6 @@ impl Simulator {
                         v.phi = [[1.0, 0.0], [0.0, 1.0]];
                         v.reseed = false;
                     }
-                    let [dx, dv] = v.phi;
-                    v.cols = taylor::variation(zeta, s, p, [[dx[0], dv[0]], [dx[1], dv[1]]]);
                 }
                 let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol, ln_tol).min(room);
                 if h.is_nan() || h < 0.0 {
@@ -881,9 +899,7 @@ impl Simulator {
             (self.u0, self.w0)
         } else {
             if let Some(v) = self.var.as_mut() {
-                let (a, da) = eval_d(&v.cols[0][..=p + 1], step.len);
-                let (b, db) = eval_d(&v.cols[1][..=p + 1], step.len);
-                v.phi = [[a, b], [da, db]];
+                v.phi = v.cols.phi_at(p + 1, step.len);
             }
             eval_d(&step.series.u[..=p + 1], step.len)
         };

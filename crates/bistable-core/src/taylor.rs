@@ -50,7 +50,38 @@ pub(crate) fn flight(
     order: usize,
     out: &mut FlightSeries,
 ) {
+    flight_impl::<false>(zeta, u0, w0, z, order, out, &mut VariationSeries::default());
+}
+
+/// [`flight`] and, in the same pass, the two columns of the variational equation
+/// `δx'' = −2ζδx' − U''(x)δx` along it, from the start given to `var`
+/// ([`VariationSeries::start`]): coefficients `0..=order + 1` of each column. Each order's
+/// variational sum runs while the next order of the flight is computed (independent chains).
+pub(crate) fn flight_with_variation(
+    zeta: f64,
+    u0: f64,
+    w0: f64,
+    z: &[f64; BUF],
+    order: usize,
+    out: &mut FlightSeries,
+    var: &mut VariationSeries,
+) {
+    flight_impl::<true>(zeta, u0, w0, z, order, out, var);
+}
+
+#[inline(always)]
+fn flight_impl<const VAR: bool>(
+    zeta: f64,
+    u0: f64,
+    w0: f64,
+    z: &[f64; BUF],
+    order: usize,
+    out: &mut FlightSeries,
+    var: &mut VariationSeries,
+) {
     let FlightSeries { x: xp, u, sq, xr } = out;
+    // U''(x) = 1 − 6x + 6x² as a series, built order by order for the variational equation.
+    let mut a = [0.0; BUF];
     // With x reversed in xr (zero past x_0), each Cauchy product is a dot product over a length
     // rounded up to a multiple of 4; the entries read past the last computed coefficient of xp
     // and sq must be zero. Only entries written here are read from xr below R.
@@ -87,6 +118,26 @@ pub(crate) fn flight(
         }
         sq[k] = s;
         sq_prev = s;
+        if VAR {
+            // Order k of both columns: Σ_{i≤k} a_i d_{k−i} summed from i = 0, lanes apart.
+            a[k] = if k == 0 {
+                6.0 * (s - x_k) + 1.0
+            } else {
+                6.0 * (s - x_k)
+            };
+            let d = &mut var.d;
+            let mut c = [-0.0_f64; 2];
+            for (ai, dj) in a[..=k].iter().zip(d[..=k].iter().rev()) {
+                c[0] += ai * dj[0];
+                c[1] += ai * dj[1];
+            }
+            let damp = -2.0 * zeta * (k + 1) as f64;
+            let prev = d[k + 1];
+            d[k + 2] = [
+                (damp * prev[0] - c[0]) * INV_PAIR[k],
+                (damp * prev[1] - c[1]) * INV_PAIR[k],
+            ];
+        }
         // rhs = lin + 3s − 2(c_old + s·x_0)
         let rhs = (lin - 2.0 * c_old) + s * three_minus_2x0;
         let xk2 = rhs * INV_PAIR[k];
@@ -178,39 +229,44 @@ fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
-/// The two columns of the variational equation `δx'' = −2ζδx' − U''(x)δx` along a flight
-/// series, from their `(δx, δx')` at the step start: coefficients `0..=order + 1` of each.
-/// The two columns share the series of `U''(x)` and are computed in one pass (two independent
-/// sums per order; each in the order of a plain sum from `−0.0`).
-pub(crate) fn variation(
-    zeta: f64,
-    s: &FlightSeries,
-    order: usize,
-    starts: [[f64; 2]; 2],
-) -> [[f64; BUF]; 2] {
-    // U''(x) = 1 − 6x + 6x², as a series.
-    let mut a = [0.0; BUF];
-    for ((ak, sq), x) in a.iter_mut().zip(&s.sq).zip(&s.x).take(order) {
-        *ak = 6.0 * (sq - x);
+/// Coefficients of the two columns of the variational solution over a free-flight step
+/// ([`flight_with_variation`]), order by order, both columns of an order side by side.
+#[derive(Clone, Copy)]
+pub(crate) struct VariationSeries {
+    d: [[f64; 2]; BUF],
+}
+
+impl Default for VariationSeries {
+    fn default() -> Self {
+        Self { d: [[0.0; 2]; BUF] }
     }
-    a[0] += 1.0;
-    let mut d = [[0.0; BUF]; 2];
-    for (col, start) in d.iter_mut().zip(starts) {
-        col[0] = start[0];
-        col[1] = start[1];
+}
+
+impl VariationSeries {
+    /// Sets the start of the next step's series: `Φ = ∂(x, x')/∂(x, x')(t_e)` there
+    /// (row-major).
+    pub(crate) fn start(&mut self, phi: [[f64; 2]; 2]) {
+        self.d[0] = phi[0];
+        self.d[1] = phi[1];
     }
-    let [d0, d1] = &mut d;
-    for k in 0..order {
-        let (mut c0, mut c1) = (-0.0_f64, -0.0_f64);
-        for i in 0..=k {
-            c0 += a[i] * d0[k - i];
-            c1 += a[i] * d1[k - i];
+
+    /// `Φ` at `s` into the step from coefficients `0..=n`: `[[δx₀, δx₁], [δx₀', δx₁']]` (Horner
+    /// on each column, as [`eval_d`]).
+    pub(crate) fn phi_at(&self, n: usize, s: f64) -> [[f64; 2]; 2] {
+        let (mut p, mut d) = ([0.0_f64; 2], [0.0_f64; 2]);
+        for ck in self.d[..=n].iter().rev() {
+            for j in 0..2 {
+                d[j] = d[j] * s + p[j];
+                p[j] = p[j] * s + ck[j];
+            }
         }
-        let damp = -2.0 * zeta * (k + 1) as f64;
-        d0[k + 2] = (damp * d0[k + 1] - c0) * INV_PAIR[k];
-        d1[k + 2] = (damp * d1[k + 1] - c1) * INV_PAIR[k];
+        [p, d]
     }
-    d
+
+    /// Multiplies every coefficient by `r`.
+    pub(crate) fn scale(&mut self, r: f64) {
+        self.d.iter_mut().flatten().for_each(|c| *c *= r);
+    }
 }
 
 /// Contact force `N = z̈ + 2ζż + U'(z)` (Eq. 9) as a series, coefficients `0..=order`, from plate
