@@ -166,7 +166,7 @@ pub(crate) const PAD: usize = BUF + 8;
 const R: usize = BUF + 2;
 
 /// `Σ a_j b_j` over equal-length slices: chunks of four with four accumulators, then the rest.
-#[inline]
+#[inline(always)]
 fn dot_exact(a: &[f64], b: &[f64]) -> f64 {
     let (ac, ar) = a.as_chunks::<4>();
     let (bc, br) = b.as_chunks::<4>();
@@ -181,7 +181,7 @@ fn dot_exact(a: &[f64], b: &[f64]) -> f64 {
 }
 
 /// `Σ a_j b_j` over slices whose length is a multiple of 4, with four accumulators.
-#[inline]
+#[inline(always)]
 fn dot4(a: &[f64], b: &[f64]) -> f64 {
     let (a, _) = a.as_chunks::<4>();
     let (b, _) = b.as_chunks::<4>();
@@ -196,7 +196,7 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
 
 /// [`dot4`] for `a` whose entry `at` is `newest` (passed in a register) and zero past it: the
 /// chunk holding it is assembled lane by lane, the same products in the same order.
-#[inline]
+#[inline(always)]
 fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
     let q = at / 4;
     let (a, _) = a.as_chunks::<4>();
