@@ -14,11 +14,11 @@
 
 use std::collections::VecDeque;
 
-use crate::events::{Event, Well};
+use crate::events::{ContactMode, Event, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER_ENERGY};
 use crate::shaker::Sinusoid;
-use crate::simulator::{SimError, Simulator, State};
+use crate::simulator::{SimError, Simulator};
 
 /// Response class (model.md Sec. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -219,10 +219,11 @@ pub fn classify_from(
         sim.advance_instant(plate.section(k), &mut |e: &Event| {
             sticks += u64::from(matches!(e, Event::StickStart { .. }))
         })?;
-        let st = sim.state();
+        // Only the mass is recorded (`mass` skips the plate, whose phase here is zero).
+        let (x, v, mode, well) = sim.mass();
         let stats = sim.stats();
         hist.push_back(Section {
-            y: [st.x, st.v],
+            y: [x, v],
             impacts: stats.impacts,
             snaps: stats.snap_throughs,
             sticks,
@@ -251,7 +252,7 @@ pub fn classify_from(
         } else if !growth.as_ref().is_some_and(|g| g.live) && !votes.measuring(k + 1) {
             sim.disable_variational();
         }
-        let rest = at_rest_in_well_two(&st, plate);
+        let rest = at_rest_in_well_two(x, v, mode, well, plate);
         let found = if rest {
             Some((1, true))
         } else {
@@ -486,12 +487,12 @@ fn find_period(hist: &VecDeque<Section>, co: ClassifyOptions) -> Option<u32> {
 const SETTLED: f64 = 1e-12;
 
 /// In well 2, unable to cross the barrier or to reach the plate ever again (energy only decays
-/// without impacts).
-fn at_rest_in_well_two(st: &State, plate: Sinusoid) -> bool {
-    if st.well != Well::Two || st.mode != crate::ContactMode::Free {
+/// without impacts): the mass at `x` with velocity `v`, in contact `mode`, in `well`.
+fn at_rest_in_well_two(x: f64, v: f64, mode: ContactMode, well: Well, plate: Sinusoid) -> bool {
+    if well != Well::Two || mode != ContactMode::Free {
         return false;
     }
-    let energy = st.kinetic_energy() + st.potential_energy();
+    let energy = potential::kinetic(v) + potential::energy(x);
     if energy >= BARRIER_ENERGY {
         return false;
     }

@@ -409,21 +409,8 @@ impl Simulator {
 
     /// State at the current time.
     pub fn state(&self) -> State {
-        let s = self.now.since(self.t0);
         let (z, zdot, _) = self.plate.law().motion(self.now);
-        let riding = if self.live {
-            self.step.riding
-        } else {
-            self.mode == ContactMode::Sticking
-        };
-        let (x, v, mode) = if riding {
-            (z, zdot, ContactMode::Sticking)
-        } else if self.live && s > 0.0 {
-            let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
-            (x, v, ContactMode::Free)
-        } else {
-            (self.u0 + z, self.w0 + zdot, ContactMode::Free)
-        };
+        let (x, v, mode) = self.mass_with(|| (z, zdot));
         State {
             t: self.now.to_f64(),
             x,
@@ -432,6 +419,38 @@ impl Simulator {
             zdot,
             mode,
             well: self.well,
+        }
+    }
+
+    /// The mass now: position, velocity, contact mode and well, the same values as in
+    /// [`Simulator::state`], without evaluating the plate's motion when the mass is in flight
+    /// inside a step (its position and velocity then come from the step's series alone).
+    pub fn mass(&self) -> (f64, f64, ContactMode, Well) {
+        let (x, v, mode) = self.mass_with(|| {
+            let (z, zdot, _) = self.plate.law().motion(self.now);
+            (z, zdot)
+        });
+        (x, v, mode, self.well)
+    }
+
+    /// Position, velocity and mode of the mass now; `plate` gives the plate's position and
+    /// velocity now, asked only when they are needed.
+    fn mass_with(&self, plate: impl FnOnce() -> (f64, f64)) -> (f64, f64, ContactMode) {
+        let s = self.now.since(self.t0);
+        let riding = if self.live {
+            self.step.riding
+        } else {
+            self.mode == ContactMode::Sticking
+        };
+        if riding {
+            let (z, zdot) = plate();
+            (z, zdot, ContactMode::Sticking)
+        } else if self.live && s > 0.0 {
+            let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
+            (x, v, ContactMode::Free)
+        } else {
+            let (z, zdot) = plate();
+            (self.u0 + z, self.w0 + zdot, ContactMode::Free)
         }
     }
 
