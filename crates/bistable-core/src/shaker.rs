@@ -123,8 +123,14 @@ impl Sinusoid {
     fn scale_by_phase(&self, s: f64, c: f64, out: &mut [f64]) {
         // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
         let cycle = [s, c, -s, -c];
-        for (k, o) in out.iter_mut().enumerate() {
-            *o *= cycle[k % 4];
+        let (quads, rest) = out.as_chunks_mut::<4>();
+        for q in quads {
+            for (o, f) in q.iter_mut().zip(cycle) {
+                *o *= f;
+            }
+        }
+        for (o, f) in rest.iter_mut().zip(cycle) {
+            *o *= f;
         }
         out[0] += self.offset;
     }
