@@ -21,6 +21,26 @@ pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
     (s, err)
 }
 
+/// `x.round()` (halves away from zero) in plain arithmetic, the same value for every `x`: on
+/// x86-64 without SSE4.1 `f64::round` is a library call, and this one sits on every plate
+/// evaluation.
+#[inline]
+pub(crate) fn round_half_away(x: f64) -> f64 {
+    const TWO_52: f64 = 4_503_599_627_370_496.0;
+    let a = x.abs();
+    if a >= TWO_52 || a.is_nan() {
+        // Already an integer (or NaN).
+        return x;
+    }
+    // a + 2^52 rounds to the nearest integer, halves to even (exact otherwise); a half that
+    // went down is taken up.
+    let mut r = (a + TWO_52) - TWO_52;
+    if r - a == -0.5 {
+        r += 1.0;
+    }
+    r.copysign(x)
+}
+
 /// Error-free product: `a * b = p + err` exactly (Dekker; no FMA needed, valid while the
 /// operands are below `2^996` in magnitude).
 #[inline]
@@ -81,7 +101,7 @@ impl Instant {
         let (p, e2) = two_sum(p, offset);
         let pe = pe + e2;
         // Subtract the nearest multiple of 2π, with 2π in three parts.
-        let k = ((p + pe) / TWO_PI.0).round();
+        let k = round_half_away((p + pe) / TWO_PI.0);
         let (q, qe) = two_prod(k, TWO_PI.0);
         let r = (p - q) + (pe - qe - k * TWO_PI.1 - k * TWO_PI.2);
         if r >= std::f64::consts::PI {
@@ -136,6 +156,39 @@ mod tests {
         assert!((lo - 5.551115123125783e-12).abs() < 1e-24, "{lo}");
         // The plain sum is off by many ulps; the two-part sum is not.
         assert!((naive - 100_000.0).abs() > 1e-7);
+    }
+
+    #[test]
+    fn round_half_away_is_round() {
+        let mut xs = vec![
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            1.5,
+            2.5,
+            -2.5,
+            0.49999999999999994,
+            1e15 + 0.5,
+        ];
+        xs.extend([
+            4503599627370495.5,
+            4503599627370496.0,
+            1e300,
+            f64::INFINITY,
+            -1e-300,
+        ]);
+        let mut v = 0.123_f64;
+        for _ in 0..10_000 {
+            // A spread of magnitudes and signs, and the halves next to them.
+            v = (v * 7919.0).fract();
+            let x = (v - 0.5) * 10f64.powi((v * 40.0) as i32 - 10);
+            xs.extend([x, x.trunc() + 0.5, x.trunc() - 0.5]);
+        }
+        for x in xs {
+            assert_eq!(round_half_away(x).to_bits(), x.round().to_bits(), "{x}");
+        }
+        assert!(round_half_away(f64::NAN).is_nan());
     }
 
     #[test]
