@@ -219,7 +219,7 @@ pub fn classify_from(
         sim.advance_instant(plate.section(k), &mut |e: &Event| {
             sticks += u64::from(matches!(e, Event::StickStart { .. }))
         })?;
-        // Only the mass is recorded (`mass` skips the plate, whose phase here is zero).
+        // Only the mass is recorded: `mass` skips the plate's sine and cosine.
         let (x, v, mode, well) = sim.mass();
         let stats = sim.stats();
         hist.push_back(Section {
