@@ -275,6 +275,9 @@ struct Variational {
     reseed: bool,
 }
 
+/// `Φ = I`: the variational solution where it starts.
+const IDENTITY: [[f64; 2]; 2] = [[1.0, 0.0], [0.0, 1.0]];
+
 /// Flights shorter than this count towards the Zeno guard (time units).
 const SHORT_FLIGHT: f64 = 1e-6;
 
@@ -588,13 +591,13 @@ impl Simulator {
     pub fn enable_variational(&mut self) {
         let st = self.state();
         self.var = Some(Variational {
-            phi: [[1.0, 0.0], [0.0, 1.0]],
+            phi: IDENTITY,
             cols: VariationSeries::default(),
             reseed: false,
         });
         self.restart_at_now(&st, st.z, st.zdot);
         if let Some(v) = self.var.as_mut() {
-            v.phi = [[1.0, 0.0], [0.0, 1.0]];
+            v.phi = IDENTITY;
         }
     }
 
@@ -604,7 +607,7 @@ impl Simulator {
     pub fn start_variational(&mut self) {
         if !self.live && self.now == self.t0 {
             self.var = Some(Variational {
-                phi: [[1.0, 0.0], [0.0, 1.0]],
+                phi: IDENTITY,
                 cols: VariationSeries::default(),
                 reseed: false,
             });
@@ -780,26 +783,11 @@ impl Simulator {
                 // With the variational equations, their series is computed in the same pass
                 // (from Φ = I if a reseed is pending; the reseed is taken only if the step
                 // goes on).
-                match self.var.as_mut() {
-                    Some(v) => {
-                        let phi = if v.reseed {
-                            [[1.0, 0.0], [0.0, 1.0]]
-                        } else {
-                            v.phi
-                        };
-                        v.cols.start(phi);
-                        taylor::flight_with_variation(
-                            zeta,
-                            self.u0,
-                            self.w0,
-                            &z,
-                            p,
-                            s,
-                            &mut v.cols,
-                        );
-                    }
-                    None => taylor::flight(zeta, self.u0, self.w0, &z, p, s),
-                }
+                let var = self.var.as_mut().map(|v| {
+                    v.cols.start(if v.reseed { IDENTITY } else { v.phi });
+                    &mut v.cols
+                });
+                taylor::flight(zeta, self.u0, self.w0, &z, p, s, var);
                 if !s.x[..=p + 1].iter().all(|c| c.is_finite()) {
                     return Err(nonfinite);
                 }
@@ -827,7 +815,7 @@ impl Simulator {
                 }
                 if let Some(v) = self.var.as_mut() {
                     if v.reseed {
-                        v.phi = [[1.0, 0.0], [0.0, 1.0]];
+                        v.phi = IDENTITY;
                         v.reseed = false;
                     }
                 }

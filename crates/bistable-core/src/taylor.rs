@@ -41,7 +41,11 @@ impl Default for FlightSeries {
 }
 
 /// Free flight `x'' = −2ζx' − U'(x)` from gap `u0`, gap velocity `w0` and plate coefficients `z`
-/// (at least `order + 2` of them). Fills coefficients `0..=order + 1` of `out`.
+/// (at least `order + 2` of them). Fills coefficients `0..=order + 1` of `out`. With `var`, also
+/// the two columns of the variational equation `δx'' = −2ζδx' − U''(x)δx` along it, from the
+/// start given to `var` ([`VariationSeries::start`]), coefficients `0..=order + 1` of each, in
+/// the same pass: each order's variational sum runs while the next order of the flight is
+/// computed (independent chains).
 pub(crate) fn flight(
     zeta: f64,
     u0: f64,
@@ -49,35 +53,25 @@ pub(crate) fn flight(
     z: &[f64; BUF],
     order: usize,
     out: &mut FlightSeries,
+    var: Option<&mut VariationSeries>,
 ) {
-    flight_impl::<false>(zeta, u0, w0, z, order, out, &mut VariationSeries::default());
+    match var {
+        Some(v) => flight_pass::<true>(zeta, u0, w0, z, order, out, Some(v)),
+        None => flight_pass::<false>(zeta, u0, w0, z, order, out, None),
+    }
 }
 
-/// [`flight`] and, in the same pass, the two columns of the variational equation
-/// `δx'' = −2ζδx' − U''(x)δx` along it, from the start given to `var`
-/// ([`VariationSeries::start`]): coefficients `0..=order + 1` of each column. Each order's
-/// variational sum runs while the next order of the flight is computed (independent chains).
-pub(crate) fn flight_with_variation(
-    zeta: f64,
-    u0: f64,
-    w0: f64,
-    z: &[f64; BUF],
-    order: usize,
-    out: &mut FlightSeries,
-    var: &mut VariationSeries,
-) {
-    flight_impl::<true>(zeta, u0, w0, z, order, out, var);
-}
-
+/// [`flight`], compiled once with the variational equations (`VAR`, `var` given) and once
+/// without.
 #[inline(always)]
-fn flight_impl<const VAR: bool>(
+fn flight_pass<const VAR: bool>(
     zeta: f64,
     u0: f64,
     w0: f64,
     z: &[f64; BUF],
     order: usize,
     out: &mut FlightSeries,
-    var: &mut VariationSeries,
+    mut var: Option<&mut VariationSeries>,
 ) {
     let FlightSeries { x: xp, u, sq, xr } = out;
     // U''(x) = 1 − 6x + 6x² as a series, built order by order for the variational equation.
@@ -118,7 +112,7 @@ fn flight_impl<const VAR: bool>(
         }
         sq[k] = s;
         sq_prev = s;
-        if VAR {
+        if let (true, Some(var)) = (VAR, var.as_deref_mut()) {
             // Order k of both columns: Σ_{i≤k} a_i d_{k−i} summed from i = 0, lanes apart.
             a[k] = if k == 0 {
                 6.0 * (s - x_k) + 1.0
@@ -230,8 +224,8 @@ fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
 }
 
 /// Coefficients of the two columns of the variational solution over a free-flight step
-/// ([`flight_with_variation`]), order by order, both columns of an order side by side.
-#[derive(Clone, Copy)]
+/// ([`flight`]), order by order, both columns of an order side by side.
+#[derive(Clone)]
 pub(crate) struct VariationSeries {
     d: [[f64; 2]; BUF],
 }
@@ -348,7 +342,7 @@ mod tests {
         let z = [0.0; BUF];
         let order = 20;
         let mut s = FlightSeries::default();
-        flight(zeta, a, 0.0, &z, order, &mut s);
+        flight(zeta, a, 0.0, &z, order, &mut s, None);
         let wd = (1.0 - zeta * zeta).sqrt();
         let h = 0.3;
         let exact = a * (-zeta * h).exp() * ((wd * h).cos() + zeta / wd * (wd * h).sin());
@@ -361,7 +355,7 @@ mod tests {
         let z = [0.0; BUF];
         let order = 24;
         let mut s = FlightSeries::default();
-        flight(0.0, 0.3, 0.2, &z, order, &mut s);
+        flight(0.0, 0.3, 0.2, &z, order, &mut s, None);
         let h = step_size(&[&s.x[..=order]], order, 1e-16, 1e-16_f64.ln());
         let e0 = 0.5 * 0.2 * 0.2 + crate::potential::energy(0.3);
         let (x, v) = eval_d(&s.x[..=order], h);
