@@ -823,16 +823,22 @@ impl Simulator {
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
+                // Checked for the whole step first, alongside the root search: far from the
+                // barrier over `h`, so over any shorter step too.
+                let far = barrier_far(self.well, self.on_barrier, &s.x[..=p + 1], h);
                 step.len = h;
                 step.end = StepEnd::Plain;
                 if let Some(r) = first_root(&gap[m..], h) {
                     step.len = r;
                     step.end = StepEnd::Impact;
                 }
-                if let Some(r) = barrier_root(self.well, self.on_barrier, &s.x[..=p + 1], step.len)
-                {
-                    step.len = r;
-                    step.end = StepEnd::Barrier;
+                if !far {
+                    if let Some(r) =
+                        barrier_root(self.well, self.on_barrier, &s.x[..=p + 1], step.len)
+                    {
+                        step.len = r;
+                        step.end = StepEnd::Barrier;
+                    }
                 }
             }
             ContactMode::Sticking => {
@@ -855,15 +861,18 @@ impl Simulator {
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
+                let far = barrier_far(self.well, self.on_barrier, &z[..=p], h);
                 step.len = h;
                 step.end = StepEnd::Plain;
                 if let Some(r) = m.and_then(|m| first_root(&n[m..], h)) {
                     step.len = r;
                     step.end = StepEnd::Release { at_root: true };
                 }
-                if let Some(r) = barrier_root(self.well, self.on_barrier, &z[..=p], step.len) {
-                    step.len = r;
-                    step.end = StepEnd::Barrier;
+                if !far {
+                    if let Some(r) = barrier_root(self.well, self.on_barrier, &z[..=p], step.len) {
+                        step.len = r;
+                        step.end = StepEnd::Barrier;
+                    }
                 }
             }
         }
@@ -1049,20 +1058,29 @@ impl Simulator {
     }
 }
 
+/// Whether the series `x` of the position stays clear of `x = ½` over `(0, h]` by the bound
+/// `|x(s) − x(0)| ≤ Σ_{k≥1} |x_k| h^k`, which settles most steps. The bound only grows with
+/// `h` (also as computed: rounding is monotone), so clear over `h` means clear over any
+/// shorter step.
+fn barrier_far(well: Well, on_barrier: bool, x: &[f64], h: f64) -> bool {
+    if on_barrier {
+        return false;
+    }
+    let sign = if well == Well::Two { 1.0 } else { -1.0 };
+    let (mut reach, mut hk) = (0.0, 1.0);
+    for &xk in &x[1..] {
+        hk *= h;
+        reach += xk.abs() * hk;
+    }
+    sign * (x[0] - BARRIER) > reach
+}
+
 /// First crossing of `x = ½` out of `well` within `(0, h]`, for the series `x` of the position
 /// (`on_barrier`: the step starts on the barrier, so that root is divided out).
 fn barrier_root(well: Well, on_barrier: bool, x: &[f64], h: f64) -> Option<f64> {
     let sign = if well == Well::Two { 1.0 } else { -1.0 };
-    // Most steps stay far from the barrier: |x(s) − x(0)| ≤ Σ_{k≥1} |x_k| h^k settles them.
-    if !on_barrier {
-        let (mut reach, mut hk) = (0.0, 1.0);
-        for &xk in &x[1..] {
-            hk *= h;
-            reach += xk.abs() * hk;
-        }
-        if sign * (x[0] - BARRIER) > reach {
-            return None;
-        }
+    if barrier_far(well, on_barrier, x, h) {
+        return None;
     }
     let mut g = [0.0; BUF];
     for (gk, &xk) in g.iter_mut().zip(x) {
