@@ -186,9 +186,18 @@ fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64, ends: Option<(f64, f64)>)
     }
     // The last iterate is lo or hi. Exponential search away from it for the other sign, within
     // the bracket, then bisection down to adjacent doubles.
-    let positive = |v: f64| eval(c, v) > 0.0;
     let (mut a, mut b) = (lo, hi);
     let mut d = f64::EPSILON * x.abs().max(f64::MIN_POSITIVE);
+    // The first probe, the one after it and the first midpoint after it are evaluated together
+    // (independent chains, in the time of one); later points one by one.
+    let first = if x == lo { x + d } else { x - d };
+    let second = if x == lo { x + 2.0 * d } else { x - 2.0 * d };
+    let ahead = [first, second, 0.5 * (x + first)];
+    let known = eval_n(c, ahead);
+    let positive = |v: f64| {
+        let hit = ahead.iter().position(|s| s.to_bits() == v.to_bits());
+        hit.map_or_else(|| eval(c, v), |i| known[i]) > 0.0
+    };
     if x == lo {
         while x + d < b {
             if positive(x + d) {
@@ -220,6 +229,18 @@ fn polish(c: &[f64], h: f64, mut lo: f64, mut hi: f64, ends: Option<(f64, f64)>)
             b = mid;
         }
     }
+}
+
+/// `Σ c_k s^k` at each point of `s` (Horner, as [`eval`], the chains interleaved).
+#[inline]
+fn eval_n<const N: usize>(c: &[f64], s: [f64; N]) -> [f64; N] {
+    let mut acc = [0.0; N];
+    for &ck in c.iter().rev() {
+        for j in 0..N {
+            acc[j] = acc[j] * s[j] + ck;
+        }
+    }
+    acc
 }
 
 /// Value, derivative and `Σ |c_k| s^k` (the scale of the rounding error of the value) at `s ≥ 0`.
@@ -286,6 +307,22 @@ mod tests {
         let mut lifted = c.clone();
         lifted[0] += 1e-10;
         assert!(first_root(&lifted, 1.0).is_none());
+    }
+
+    #[test]
+    fn interleaved_evaluation_equals_horner_bit_for_bit() {
+        let c = poly_from_roots(&[0.3, 0.31, 0.7, -0.2, 1.3], -1.7);
+        for i in 0..1000 {
+            let s = [
+                f64::from(i) * 1.37e-3,
+                0.5 - f64::from(i) * 1e-4,
+                1.0 / f64::from(i + 1),
+            ];
+            let got = eval_n(&c, s);
+            for (g, &sj) in got.iter().zip(&s) {
+                assert_eq!(g.to_bits(), eval(&c, sj).to_bits(), "{sj}");
+            }
+        }
     }
 
     #[test]
