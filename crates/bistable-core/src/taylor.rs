@@ -165,11 +165,7 @@ fn dot_exact(a: &[f64], b: &[f64]) -> f64 {
     let (ac, ar) = a.as_chunks::<4>();
     let (bc, br) = b.as_chunks::<4>();
     let mut acc = [0.0; 4];
-    for (x, y) in ac.iter().zip(bc) {
-        for i in 0..4 {
-            acc[i] += x[i] * y[i];
-        }
-    }
+    add_chunks(&mut acc, ac, bc);
     let tail: f64 = ar.iter().zip(br).map(|(x, y)| x * y).sum();
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
@@ -180,12 +176,18 @@ fn dot4(a: &[f64], b: &[f64]) -> f64 {
     let (a, _) = a.as_chunks::<4>();
     let (b, _) = b.as_chunks::<4>();
     let mut acc = [0.0; 4];
+    add_chunks(&mut acc, a, b);
+    (acc[0] + acc[1]) + (acc[2] + acc[3])
+}
+
+/// Adds the products of the chunks of `a` and `b`, lane by lane, to `acc`.
+#[inline(always)]
+fn add_chunks(acc: &mut [f64; 4], a: &[[f64; 4]], b: &[[f64; 4]]) {
     for (x, y) in a.iter().zip(b) {
         for i in 0..4 {
             acc[i] += x[i] * y[i];
         }
     }
-    (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 /// [`dot4`] for `a` whose entry `at` is `newest` (passed in a register) and zero past it: the
@@ -196,11 +198,7 @@ fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
     let (a, _) = a.as_chunks::<4>();
     let (b, _) = b.as_chunks::<4>();
     let mut acc = [0.0; 4];
-    for (x, y) in a[..q].iter().zip(&b[..q]) {
-        for i in 0..4 {
-            acc[i] += x[i] * y[i];
-        }
-    }
+    add_chunks(&mut acc, &a[..q], &b[..q]);
     let m = &a[q];
     let y = &b[q];
     // Lane by lane: entries before `at` (stored iterations ago), `newest`, zeros.
