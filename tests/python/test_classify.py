@@ -13,11 +13,29 @@ VELOCITIES = [0.03, 0.07, 0.11, 0.15]
 OPTS = {"max_periods": 300.0, "lyapunov_periods": 50}
 
 
-def cli_classify(cli, omega, velocity):
+# Settings of the sensitivity test other than the defaults; all but perturbation and
+# repeat_periods show in the records of SENS_POINTS (checked below).
+SENS = {
+    "repeats": 3,
+    "efoldings": 5.0,
+    "perturbation": 1e-9,
+    "horizon": 100.0,
+    "repeat_periods": 30.0,
+    "lyapunov_windows": 2,
+}
+SENS_POINTS = [(2.45, 0.03), (2.45, 0.07), (1.5, 0.11), (0.85, 0.11)]
+
+
+def cli_flags(options):
+    """`bistable classify` flags for keyword arguments of `bi.classify`."""
+    return [x for k, v in options.items() for x in ("--" + k.replace("_", "-"), repr(v))]
+
+
+def cli_classify(cli, omega, velocity, options=None):
     out = subprocess.run(
         [
             str(cli), "classify", "--omega", repr(omega), "--velocity", repr(velocity),
-            "--max-periods", "300", "--lyapunov-periods", "50",
+            "--max-periods", "300", "--lyapunov-periods", "50", *cli_flags(options or {}),
         ],
         check=True,
         capture_output=True,
@@ -55,6 +73,65 @@ def test_sweep_map_equals_the_cli(cli_grid):
         expected = without_time(cli_grid[(row["omega"], row["velocity"])])
         got = {k: (None if pd.isna(v) else v) for k, v in without_time(row).items()}
         assert got == expected, (row["omega"], row["velocity"])
+
+
+def test_sensitivity_settings_as_in_the_cli(cli):
+    pd = pytest.importorskip("pandas")
+    got = {(w, v): bi.classify(w, v, **OPTS, **SENS) for w, v in SENS_POINTS}
+    for (w, v), r in got.items():
+        assert without_time(r) == without_time(cli_classify(cli, w, v, SENS)), (w, v)
+        assert r["efoldings_threshold"] == SENS["efoldings"]
+    # Decided after `horizon` natural periods: repeated `repeats` times.
+    assert (got[(2.45, 0.03)]["sensitivity_trigger"], got[(2.45, 0.03)]["runs"]) == ("late", 4)
+    # Aperiodic: `repeats` runs and `lyapunov_windows` further chaos verdicts.
+    assert (got[(2.45, 0.07)]["sensitivity_trigger"], got[(2.45, 0.07)]["runs"]) == (
+        "aperiodic",
+        1 + SENS["repeats"] + SENS["lyapunov_windows"],
+    )
+    # A transient growth of `efoldings`: repeated; with the default threshold a single run.
+    assert got[(1.5, 0.11)]["sensitivity_trigger"] == "growth"
+    assert bi.classify(2.0, 0.11, **OPTS)["sensitivity_trigger"] == "none"
+    assert bi.classify(2.0, 0.11, **OPTS, efoldings=5.0)["sensitivity_trigger"] == "growth"
+    # The map passes them on too.
+    ws, vs = [2.45, 1.5], [0.03, 0.11]
+    df = bi.sweep.map(ws, vs, threads=2, **OPTS, **SENS)
+    for row in df.to_dict("records"):
+        expected = bi.classify(row["omega"], row["velocity"], **OPTS, **SENS)
+        got_row = {k: (None if pd.isna(x) else x) for k, x in without_time(row).items()}
+        assert got_row == without_time(expected), (row["omega"], row["velocity"])
+    # repeats=0: no test, every point a single run.
+    off = bi.sweep.map(ws, vs, threads=2, **OPTS, repeats=0)
+    assert set(off["runs"]) == {1} and set(off["sensitivity_trigger"]) == {"none"}
+
+
+def test_sensitivity_defaults_are_the_librarys():
+    """The signatures show the defaults that the Rust side applies (and the CLI, see its
+    unit test `sensitivity_defaults_are_the_librarys`)."""
+    import inspect
+
+    assert set(bi.SENSITIVITY_DEFAULTS) == set(SENS)
+    for f in (bi.classify, bi.sweep.map):
+        params = inspect.signature(f).parameters
+        for name, value in bi.SENSITIVITY_DEFAULTS.items():
+            assert params[name].default == value, (f.__name__, name)
+    assert bi.SENSITIVITY_DEFAULTS["repeats"] > 0  # the test is on by default
+
+
+def test_classify_at_the_papers_sensitive_point(cli):
+    """(0.85, 0.13): rounding decides between rest in well 2 and continuous interwell P-1."""
+    r = bi.classify(0.85, 0.13)
+    assert r["sensitive"] is True
+    shown = {o.split("=")[0] for o in r["outcomes"].split(";")}
+    assert shown == {"transient_interwell:P-1:2", "continuous_interwell:P-1:-"}, r["outcomes"]
+    expected = json.loads(
+        subprocess.run(
+            [str(cli), "classify", "--omega", "0.85", "--velocity", "0.13"],
+            check=True,
+            capture_output=True,
+            text=True,
+        ).stdout
+    )
+    assert without_time(r) == without_time(expected)
 
 
 def test_classify_paper_examples():
@@ -96,6 +173,8 @@ def test_sweep_map_arguments():
         bi.sweep.map([1.0], [0.1], lyapunov_periods=0)
     with pytest.raises(ValueError, match="'omega'"):
         bi.sweep.map([-1.0], [0.1])
+    with pytest.raises(ValueError, match="'lyapunov_windows'"):
+        bi.sweep.map([1.0], [0.1], lyapunov_windows=1025)
 
 
 def test_module_entry_point(tmp_path):
@@ -111,6 +190,17 @@ def test_module_entry_point(tmp_path):
     )
     assert r.returncode == 0, r.stderr
     assert out.read_text().splitlines()[0] == ",".join(bi.sweep.COLUMNS)
+    r = subprocess.run(
+        [sys.executable, "-m", "bistable_impact", "map", "--omega-range", "1.5:2.45:2",
+         "--velocity-range", "0.11:0.11:1", "--max-periods", "300", "--lyapunov-periods", "50",
+         "--efoldings", "5", "--repeats", "2", "--out", str(tmp_path / "s.csv")],
+        capture_output=True, text=True,
+    )
+    assert r.returncode == 0, r.stderr
+    import pandas as pd
+
+    s = pd.read_csv(tmp_path / "s.csv")
+    assert set(s["sensitivity_trigger"]) == {"growth"} and set(s["runs"]) == {3}
     r = subprocess.run(
         [sys.executable, "-m", "bistable_impact", "map", "--omega-range=-1:1:2",
          "--velocity-range", "0.07:0.07:1"],

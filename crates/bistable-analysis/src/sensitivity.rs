@@ -76,7 +76,8 @@ impl SensitivityOptions {
 
     /// Checks the settings in the order of the fields: `repeats` (`<= 64`), `efoldings`
     /// (`(0, 700]`), `perturbation` (`(0, 1e-3]`), `horizon` and `repeat_periods` (`[1, 1e8]`),
-    /// `windows` (`<= 1024`).
+    /// `windows` (`<= 1024`); the error names the setting as the adapters do
+    /// (`lyapunov_windows` for `windows`).
     pub fn check(&self) -> Result<Self, ParamError> {
         let r = self.repeats;
         check("repeats", f64::from(r), r <= 64, "must be in [0, 64]")?;
@@ -96,7 +97,12 @@ impl SensitivityOptions {
             check(name, p, (1.0..=1e8).contains(&p), "must be in [1, 1e8]")?;
         }
         let w = self.windows;
-        check("windows", f64::from(w), w <= 1024, "must be in [0, 1024]")?;
+        check(
+            "lyapunov_windows",
+            f64::from(w),
+            w <= 1024,
+            "must be in [0, 1024]",
+        )?;
         Ok(*self)
     }
 }

@@ -23,13 +23,9 @@ pub struct Classified {
     pub wall_time_s: f64,
 }
 
-/// Classifies `model`'s point from the paper's initial condition, with the default sensitivity
-/// test ([`SensitivityOptions::default`]), and times it.
-pub fn classify_point(model: &Model, options: ClassifyOptions) -> Result<Classified, SimError> {
-    classify_point_with(model, options, SensitivityOptions::default())
-}
-
-/// [`classify_point`] with the sensitivity test's settings.
+/// Classifies `model`'s point from the paper's initial condition with the sensitivity test's
+/// settings ([`SensitivityOptions::default`] for the default test, [`SensitivityOptions::off`]
+/// for a single run), and times it.
 pub fn classify_point_with(
     model: &Model,
     options: ClassifyOptions,
@@ -43,25 +39,6 @@ pub fn classify_point_with(
         sensitivity,
         wall_time_s: start.elapsed().as_secs_f64(),
     })
-}
-
-/// Classifies `model` at every `(Ω, V)` of `points` on `threads` threads, with the default
-/// sensitivity test; see [`classify_points_with`].
-pub fn classify_points<E>(
-    model: &Model,
-    points: &[(f64, f64)],
-    options: ClassifyOptions,
-    threads: Threads,
-    done: impl FnMut(usize, Result<Classified, SimError>) -> Result<(), E>,
-) -> Result<(), E> {
-    classify_points_with(
-        model,
-        points,
-        options,
-        SensitivityOptions::default(),
-        threads,
-        done,
-    )
 }
 
 /// Classifies `model` at every `(Ω, V)` of `points` on `threads` threads. Each result (a point
@@ -134,10 +111,11 @@ mod tests {
         );
         let points = [(0.85, 0.11), (0.85, 0.15), (-1.0, 0.1)];
         let mut got: Vec<Option<Result<Classified, SimError>>> = vec![None, None, None];
-        classify_points(
+        classify_points_with(
             &model,
             &points,
             ClassifyOptions::default(),
+            SensitivityOptions::default(),
             Threads::new(2).unwrap(),
             |i, r| {
                 got[i] = Some(r);
@@ -152,10 +130,11 @@ mod tests {
         assert_eq!(c(1).model.velocity(), 0.15);
         assert!(got[2].as_ref().unwrap().is_err());
         // Cancelling after the first result stops the sweep with the caller's error.
-        let r = classify_points(
+        let r = classify_points_with(
             &model,
             &points,
             ClassifyOptions::default(),
+            SensitivityOptions::default(),
             Threads::new(1).unwrap(),
             |_, _| Err("cancelled"),
         );

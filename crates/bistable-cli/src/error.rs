@@ -149,7 +149,7 @@ impl From<ParamError> for CliError {
             "perturbation" => "--perturbation",
             "horizon" => "--horizon",
             "repeat_periods" => "--repeat-periods",
-            "windows" => "--lyapunov-windows",
+            "lyapunov_windows" => "--lyapunov-windows",
             other => return CliError::invalid(other, e.value, e.rule),
         };
         CliError::invalid(option, e.value, e.rule)

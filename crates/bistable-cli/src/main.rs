@@ -146,4 +146,23 @@ mod tests {
     fn clap_definition_is_consistent() {
         Cli::command().debug_assert();
     }
+
+    #[test]
+    fn sensitivity_defaults_are_the_librarys() {
+        use bistable_analysis::sensitivity::SensitivityOptions;
+        for sub in ["classify", "map"] {
+            let mut args = vec!["bistable", sub, "--omega", "1", "--velocity", "0.1"];
+            if sub == "map" {
+                args = vec!["bistable", sub, "--omega-range", "1:2:2"];
+                args.extend(["--velocity-range", "0.1:0.2:2", "--out", "m.csv"]);
+            }
+            let parsed = Cli::try_parse_from(&args).unwrap();
+            let so = match parsed.command {
+                Command::Classify(a) => a.classify.sensitivity(),
+                Command::Map(a) => a.classify.sensitivity(),
+                _ => unreachable!(),
+            };
+            assert_eq!(so.unwrap(), SensitivityOptions::default(), "{sub}");
+        }
+    }
 }

@@ -4,7 +4,8 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use bistable_analysis::record::Record;
-use bistable_analysis::sweep::{classify_point, classify_points};
+use bistable_analysis::sensitivity::SensitivityOptions;
+use bistable_analysis::sweep::{classify_point_with, classify_points_with};
 use bistable_analysis::thresholds::{self, check_restitution};
 use bistable_core::{ClassifyOptions, Sinusoid};
 
@@ -32,11 +33,50 @@ fn classify_options(
     .map_err(|e| param_err(py, &e))
 }
 
+/// The settings of the sensitivity test, each `None` taking its default
+/// ([`SensitivityOptions::default`], also `SENSITIVITY_DEFAULTS`), checked in the CLI's order.
+#[allow(clippy::too_many_arguments)]
+fn sensitivity_options(
+    py: Python<'_>,
+    repeats: Option<u32>,
+    efoldings: Option<f64>,
+    perturbation: Option<f64>,
+    horizon: Option<f64>,
+    repeat_periods: Option<f64>,
+    lyapunov_windows: Option<u32>,
+) -> PyResult<SensitivityOptions> {
+    let d = SensitivityOptions::default();
+    SensitivityOptions {
+        repeats: repeats.unwrap_or(d.repeats),
+        efoldings: efoldings.unwrap_or(d.efoldings),
+        perturbation: perturbation.unwrap_or(d.perturbation),
+        horizon: horizon.unwrap_or(d.horizon),
+        repeat_periods: repeat_periods.unwrap_or(d.repeat_periods),
+        windows: lyapunov_windows.unwrap_or(d.windows),
+    }
+    .check()
+    .map_err(|e| param_err(py, &e))
+}
+
+/// The defaults of the sensitivity test's settings, by their Python names.
+pub(crate) fn sensitivity_defaults(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = SensitivityOptions::default();
+    let out = PyDict::new(py);
+    out.set_item("repeats", d.repeats)?;
+    out.set_item("efoldings", d.efoldings)?;
+    out.set_item("perturbation", d.perturbation)?;
+    out.set_item("horizon", d.horizon)?;
+    out.set_item("repeat_periods", d.repeat_periods)?;
+    out.set_item("lyapunov_windows", d.windows)?;
+    Ok(out)
+}
+
 /// The response class at one point (see `bistable_impact.classify`).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, zeta=0.02, restitution=0.85, tol=1e-16,
     chatter="accumulation", max_periods=20000.0, full=false, max_period=16, period_tol=1e-8,
-    lyapunov_periods=2000))]
+    lyapunov_periods=2000, repeats=None, efoldings=None, perturbation=None, horizon=None,
+    repeat_periods=None, lyapunov_windows=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn classify<'py>(
     py: Python<'py>,
@@ -51,6 +91,12 @@ pub(crate) fn classify<'py>(
     max_period: u32,
     period_tol: f64,
     lyapunov_periods: u32,
+    repeats: Option<u32>,
+    efoldings: Option<f64>,
+    perturbation: Option<f64>,
+    horizon: Option<f64>,
+    repeat_periods: Option<f64>,
+    lyapunov_windows: Option<u32>,
 ) -> PyResult<Bound<'py, PyDict>> {
     let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
     let co = classify_options(
@@ -61,8 +107,17 @@ pub(crate) fn classify<'py>(
         period_tol,
         lyapunov_periods,
     )?;
+    let so = sensitivity_options(
+        py,
+        repeats,
+        efoldings,
+        perturbation,
+        horizon,
+        repeat_periods,
+        lyapunov_windows,
+    )?;
     let point = py
-        .allow_threads(|| classify_point(&m, co))
+        .allow_threads(|| classify_point_with(&m, co, so))
         .map_err(|e| sim_err(py, &e))?;
     record_dict(py, &Record::new(&point))
 }
@@ -75,7 +130,8 @@ pub(crate) fn classify<'py>(
 #[pyfunction]
 #[pyo3(signature = (points, zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation",
     max_periods=20000.0, full=false, max_period=16, period_tol=1e-8, lyapunov_periods=300,
-    threads=0, progress=None, on_record=None))]
+    repeats=None, efoldings=None, perturbation=None, horizon=None, repeat_periods=None,
+    lyapunov_windows=None, threads=0, progress=None, on_record=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn classify_many<'py>(
     py: Python<'py>,
@@ -89,6 +145,12 @@ pub(crate) fn classify_many<'py>(
     max_period: u32,
     period_tol: f64,
     lyapunov_periods: u32,
+    repeats: Option<u32>,
+    efoldings: Option<f64>,
+    perturbation: Option<f64>,
+    horizon: Option<f64>,
+    repeat_periods: Option<f64>,
+    lyapunov_windows: Option<u32>,
     threads: usize,
     progress: Option<Py<PyAny>>,
     on_record: Option<Py<PyAny>>,
@@ -106,11 +168,20 @@ pub(crate) fn classify_many<'py>(
         period_tol,
         lyapunov_periods,
     )?;
+    let so = sensitivity_options(
+        py,
+        repeats,
+        efoldings,
+        perturbation,
+        horizon,
+        repeat_periods,
+        lyapunov_windows,
+    )?;
     let threads = threads_arg(py, threads)?;
     let mut records: Vec<Option<Record>> = vec![None; points.len()];
     let (mut done, total) = (0usize, points.len());
     py.allow_threads(|| {
-        classify_points(&m, &points, co, threads, |i, r| {
+        classify_points_with(&m, &points, co, so, threads, |i, r| {
             let record = Record::new(&r?);
             done += 1;
             check_signals()?;

@@ -49,5 +49,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(linspace, m)?)?;
     // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;
+    // The sensitivity test's default settings (one definition, in Rust).
+    m.add(
+        "SENSITIVITY_DEFAULTS",
+        classify::sensitivity_defaults(m.py())?,
+    )?;
     Ok(())
 }

@@ -44,8 +44,15 @@ __all__ = [
     "SimulationResult",
     "Table",
     "IMPACT_COLUMNS",
+    "SENSITIVITY_DEFAULTS",
     "sweep",
 ]
+
+#: Default settings of the sensitivity test of :func:`classify` and :func:`sweep.map
+#: <bistable_impact.sweep.map>` (``repeats, efoldings, perturbation, horizon, repeat_periods,
+#: lyapunov_windows``; defined once, in ``bistable_analysis::sensitivity``).
+SENSITIVITY_DEFAULTS: Dict[str, Any] = dict(_native.SENSITIVITY_DEFAULTS)
+_SENS = SENSITIVITY_DEFAULTS
 
 #: Columns of :attr:`SimulationResult.impacts` (the CLI's impacts CSV header).
 IMPACT_COLUMNS = ("index", "t", "phase", "x", "v_before", "v_after", "delta_k")
@@ -142,13 +149,32 @@ def classify(
     max_period: int = 16,
     period_tol: float = 1e-8,
     lyapunov_periods: int = 2000,
+    repeats: int = _SENS["repeats"],
+    efoldings: float = _SENS["efoldings"],
+    perturbation: float = _SENS["perturbation"],
+    horizon: float = _SENS["horizon"],
+    repeat_periods: float = _SENS["repeat_periods"],
+    lyapunov_windows: int = _SENS["lyapunov_windows"],
 ) -> Dict[str, Any]:
-    """The response class at ``(Ω, V)`` from the paper's initial condition, as ``bistable
-    classify`` prints it: a dict with the CLI's JSON keys ``omega, velocity, zeta, restitution,
-    class ('intrawell'|'transient_interwell'|'continuous_interwell'), period (shaker periods or
-    None), chaotic, lyapunov (per unit of τ, or None), snap_throughs, final_well (1|2),
+    """The response class at ``(Ω, V)`` from the paper's initial condition, with the final-state
+    sensitivity test, as ``bistable classify`` prints it: a dict with the CLI's JSON keys
+    ``omega, velocity, zeta, restitution, class
+    ('intrawell'|'transient_interwell'|'continuous_interwell'), period (shaker periods or None),
+    chaotic, lyapunov (per unit of τ, or None), snap_throughs, final_well (1|2),
     at_rest_in_second_well, impacts_per_period, sticking, periods_simulated (natural periods),
-    stopped_early, wall_time_s (s)``.
+    stopped_early, wall_time_s (s)`` and the sensitivity test's ``sensitive, runs,
+    majority_fraction, outcomes, sensitivity_trigger, efoldings, efoldings_threshold``.
+
+    Sensitivity: a run whose transient amplified an infinitesimal perturbation by at least
+    ``e**efoldings`` before its class was decided (tracked over the first ``horizon`` natural
+    periods), one decided later, and one still aperiodic at the end are repeated ``repeats``
+    times (tolerance ×10 and ×100, and starts displaced by ``perturbation``; repeats of an
+    aperiodic run last ``repeat_periods`` natural periods), and an aperiodic run's chaos verdict
+    on ``lyapunov_windows`` further windows of the run itself. ``sensitive`` is True when these
+    do not all reach the same outcome (class, period, chaos, final well): double precision
+    cannot decide such a point. The result is the most frequent outcome; ``outcomes`` lists
+    each as ``class:period:well=share`` joined by ``;``, most frequent first. ``repeats=0``
+    turns the test off (a single run). See ``docs/sensitivity.md``.
 
     Args (besides the model's, see :func:`simulate`):
         max_periods: longest run in natural periods, ``[1, 1e8]``.
@@ -156,6 +182,17 @@ def classify(
         max_period: largest period looked for, in shaker periods, ``[1, 64]``.
         period_tol: relative agreement that counts as periodic, ``(0, 1e-3]``.
         lyapunov_periods: shaker periods averaged for the Lyapunov exponent (>= 1).
+        repeats: perturbed repeats of a suspect run, ``[0, 64]`` (0: no test).
+        efoldings: transient growth (natural log of the amplification) from which a decided
+            run is suspect, ``(0, 700]``.
+        perturbation: displacement of the repeats' initial state ``(x0, x0')``,
+            ``(0, 1e-3]``.
+        horizon: natural periods over which the growth is tracked, ``[1, 1e8]``.
+        repeat_periods: length of the repeats of an aperiodic run in natural periods,
+            ``[1, 1e8]``.
+        lyapunov_windows: further Lyapunov windows of an aperiodic run, ``[0, 1024]``.
+
+    The defaults are those of ``bistable classify`` (:data:`SENSITIVITY_DEFAULTS`).
     """
     return _native.classify(
         omega,
@@ -169,6 +206,12 @@ def classify(
         max_period=max_period,
         period_tol=period_tol,
         lyapunov_periods=lyapunov_periods,
+        repeats=repeats,
+        efoldings=efoldings,
+        perturbation=perturbation,
+        horizon=horizon,
+        repeat_periods=repeat_periods,
+        lyapunov_windows=lyapunov_windows,
     )
 
 

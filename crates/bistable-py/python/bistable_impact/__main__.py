@@ -49,6 +49,20 @@ def main(argv: Optional[List[str]] = None) -> int:
     m.add_argument("--chatter", choices=["accumulation", "paper"], default="accumulation")
     m.add_argument("--max-periods", type=float, default=20000.0)
     m.add_argument("--lyapunov-periods", type=int, default=300)
+    from . import SENSITIVITY_DEFAULTS as sens
+
+    for flag, kind, what in [
+        ("--repeats", int, "perturbed repeats of a suspect run (0: no test)"),
+        ("--efoldings", float, "transient growth (e-foldings) from which a run is repeated"),
+        ("--perturbation", float, "displacement of the repeats' initial state"),
+        ("--horizon", float, "natural periods over which the growth is tracked"),
+        ("--repeat-periods", float, "length of an aperiodic run's repeats (natural periods)"),
+        ("--lyapunov-windows", int, "further chaos verdicts of an aperiodic run"),
+    ]:
+        default = sens[flag[2:].replace("-", "_")]
+        m.add_argument(
+            flag, type=kind, default=default, help=f"sensitivity test: {what} (default {default})"
+        )
     a = p.parse_args(argv)
 
     from . import sweep
@@ -73,6 +87,12 @@ def main(argv: Optional[List[str]] = None) -> int:
             chatter=a.chatter,
             max_periods=a.max_periods,
             lyapunov_periods=a.lyapunov_periods,
+            repeats=a.repeats,
+            efoldings=a.efoldings,
+            perturbation=a.perturbation,
+            horizon=a.horizon,
+            repeat_periods=a.repeat_periods,
+            lyapunov_windows=a.lyapunov_windows,
         )
     except (ValueError, RuntimeError) as e:
         print(f"error: {e}", file=sys.stderr)

@@ -7,6 +7,8 @@ Event = Dict[str, Any]
 
 #: Keys of the classify record, in order: the map CSV's columns.
 COLUMNS: List[str]
+#: Default settings of the sensitivity test (``None`` arguments of classify/classify_many).
+SENSITIVITY_DEFAULTS: Dict[str, Union[int, float]]
 
 def simulate(
     omega: float,
@@ -31,6 +33,12 @@ def classify(
     max_period: int = 16,
     period_tol: float = 1e-8,
     lyapunov_periods: int = 2000,
+    repeats: Optional[int] = None,
+    efoldings: Optional[float] = None,
+    perturbation: Optional[float] = None,
+    horizon: Optional[float] = None,
+    repeat_periods: Optional[float] = None,
+    lyapunov_windows: Optional[int] = None,
 ) -> Dict[str, Any]: ...
 def classify_many(
     points: List[Tuple[float, float]],
@@ -43,6 +51,12 @@ def classify_many(
     max_period: int = 16,
     period_tol: float = 1e-8,
     lyapunov_periods: int = 300,
+    repeats: Optional[int] = None,
+    efoldings: Optional[float] = None,
+    perturbation: Optional[float] = None,
+    horizon: Optional[float] = None,
+    repeat_periods: Optional[float] = None,
+    lyapunov_windows: Optional[int] = None,
     threads: int = 0,
     progress: Optional[Callable[[int, int], Any]] = None,
     on_record: Optional[Callable[[Dict[str, Any]], Any]] = None,
@@ -183,6 +197,12 @@ def basin_cells(
     chatter: str = "accumulation",
     max_periods: float = 2000.0,
     lyapunov_periods: int = 300,
+    repeats: Optional[int] = None,
+    efoldings: Optional[float] = None,
+    perturbation: Optional[float] = None,
+    horizon: Optional[float] = None,
+    repeat_periods: Optional[float] = None,
+    lyapunov_windows: Optional[int] = None,
     threads: int = 0,
     check_only: bool = False,
 ) -> List[Dict[str, Any]]: ...

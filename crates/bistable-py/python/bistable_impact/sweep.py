@@ -13,6 +13,7 @@ from . import _native
 #: Columns of the map (the CLI map CSV's header, in order; defined once, in
 #: ``bistable_analysis::record::COLUMNS``).
 COLUMNS = tuple(_native.COLUMNS)
+_SENS = _native.SENSITIVITY_DEFAULTS
 
 Point = Tuple[float, float]
 #: Finished points of a local sweep written to the store at a time.
@@ -84,6 +85,12 @@ def map(
     max_period: int = 16,
     period_tol: float = 1e-8,
     lyapunov_periods: int = 300,
+    repeats: int = _SENS["repeats"],
+    efoldings: float = _SENS["efoldings"],
+    perturbation: float = _SENS["perturbation"],
+    horizon: float = _SENS["horizon"],
+    repeat_periods: float = _SENS["repeat_periods"],
+    lyapunov_windows: int = _SENS["lyapunov_windows"],
 ):
     """Classifies every point of the grid ``omega × velocity`` (:func:`bistable_impact.classify`
     at each ``(Ω, V)``) and returns a pandas DataFrame with the CLI map CSV's columns
@@ -98,7 +105,8 @@ def map(
             threads in this process (0: all cores), with the GIL released; Ctrl-C
             (``KeyboardInterrupt``) stops the sweep after the points in progress.
         store: a CSV file (the map CSV's columns) that keeps results: points already in it
-            (same ``zeta`` and ``restitution``) are not computed again; finished points are
+            (same ``zeta`` and ``restitution``; the other options are not recorded in the
+            file: resume with the same ones) are not computed again; finished points are
             appended to it as the sweep goes (with a client each task's rows when it is back,
             without one every 64 points and when the sweep stops, also by Ctrl-C or an
             error), so a crashed or interrupted sweep resumes with only the missing points;
@@ -125,6 +133,12 @@ def map(
         max_period=max_period,
         period_tol=period_tol,
         lyapunov_periods=lyapunov_periods,
+        repeats=repeats,
+        efoldings=efoldings,
+        perturbation=perturbation,
+        horizon=horizon,
+        repeat_periods=repeat_periods,
+        lyapunov_windows=lyapunov_windows,
     )
     w = np.atleast_1d(np.asarray(omega, dtype=float))
     v = np.atleast_1d(np.asarray(velocity, dtype=float))
