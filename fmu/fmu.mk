@@ -69,13 +69,13 @@ fmu: setup
 	@echo "fmu: $(FMU) $(FMU3)"
 
 FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/me.c tests/fmu_host/fuzz.c
-$(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h tests/fmu_host/md_text.h fmu/include/$(FMU_NAME).h
+$(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h tests/fmu_host/md_text.h tests/fmu_host/fuzzkit.h fmu/include/$(FMU_NAME).h
 	mkdir -p $(FMU_DIR)
 	$(CC) -std=gnu11 -O2 -g -Wall -Wextra -Werror -Ifmu/include $(FMU_HOST_SRC) -o $@ -ldl -lm
 
 fmu-host: $(FMU_HOST)
 
-$(FMU_HOST3): $(FMU_HOST3_SRC) tests/fmu_host/fmi3/host3.h tests/fmu_host/md_text.h
+$(FMU_HOST3): $(FMU_HOST3_SRC) tests/fmu_host/fmi3/host3.h tests/fmu_host/md_text.h tests/fmu_host/fuzzkit.h
 	mkdir -p $(FMU_DIR)
 	@test -f "$(FMI_C_HEADERS)/fmi3Functions.h" || { echo "fmi3Functions.h not found (fmpy c-code: '$(FMI_C_HEADERS)')"; exit 1; }
 	$(CC) -std=gnu11 -O2 -g -Wall -Wextra -Werror -I"$(FMI_C_HEADERS)" $(FMU_HOST3_SRC) -o $@ -ldl -lm

@@ -32,31 +32,13 @@
  * shaker radians) are not generated: their cost is linear in their length, not a fault.
  */
 #include "host.h"
+#include "fuzzkit.h"
 
 #include <float.h>
 #include <limits.h>
-#include <signal.h>
-#include <stdint.h>
-#include <sys/time.h>
-#include <unistd.h>
 
 /* The mass may be below the plate by at most this much, relative to max(delta_x, |x|, |z|). */
 #define GAP_BOUND 1e-12
-
-/* ---- deterministic random numbers (splitmix64) ---- */
-static uint64_t rng_state;
-
-static uint64_t rnd(void) {
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-static double unif(void) { return (double)(rnd() >> 11) * 0x1.0p-53; }
-static double urange(double a, double b) { return a + (b - a) * unif(); }
-static double logu(double a, double b) { return exp(urange(log(a), log(b))); }
-static int chance(double p) { return unif() < p; }
-static int pick(int n) { return (int)(rnd() % (uint64_t)n); }
 
 /* ---- variables from modelDescription.xml ---- */
 enum { K_REAL, K_INT, K_BOOL };
@@ -211,7 +193,7 @@ static int nbuf;
 /* A zero-filled block passed as a component that is not a live instance. */
 static _Alignas(64) unsigned char bogus[8192];
 
-/* ---- counters, failures, trace ---- */
+/* ---- counters (failures, ring of calls, watchdog: fuzzkit.h) ---- */
 enum {
     N_CALLS, N_CHECKS, N_INVARIANTS, N_INVALID, N_STATE, N_NANINF, N_NULL, N_BADVR, N_STEP_EXTREME,
     N_WRONG_TC, N_ROLLBACK, N_ROUNDTRIP, N_CROSS, N_CORRUPT, N_CRAFTED, N_CRAFTED_OK, N_REINST,
@@ -229,39 +211,14 @@ static long cnt[N_COUNT], total[N_COUNT];
 static long by_life[7];
 static double gap_min = INFINITY; /* smallest (x - z) / scale seen */
 
-static unsigned long seed_now;
-static long call_now;
-static long failures, seed_failures;
-static int trace, quiet;
-static uint64_t digest;
-
-#define RING 48
-static char ring[RING][320];
-static long ring_n;
-
-static void note(const char *fmt, ...) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(ring[ring_n % RING], sizeof ring[0], fmt, ap);
-    va_end(ap);
-    if (trace) printf("  %ld: %s\n", call_now, ring[ring_n % RING]);
-    ring_n++;
-}
-
-/* The step in progress (reported by the watchdog). */
+/* The step in progress (reported by the watchdog: kit.pending). */
 static char pending[320];
 
-static void dump_ring(void) {
-    long first = ring_n > RING ? ring_n - RING : 0;
-    printf("  last calls (seed %lu):\n", seed_now);
-    for (long k = first; k < ring_n; k++) printf("    %s\n", ring[k % RING]);
-    if (pending[0]) printf("  in progress: %s\n", pending);
-}
-
+/* The FMU's last log message (kit.last_log). */
 static char log_msg[1024];
 
 /* FUZZ_SAVE_DIR: the serialized state before the last step and its arguments, written on the
- * first failure of a seed (for a regression test). */
+ * first failure of a seed and on a hang or crash (kit.save; for a regression test). */
 static unsigned char *prestep;
 static size_t prestep_n;
 static double prestep_tc, prestep_h;
@@ -274,59 +231,6 @@ static void save_prestep(void) {
              prestep_tc, prestep_h);
     FILE *f = fopen(path, "wb");
     if (f) fwrite(prestep, 1, prestep_n, f), fclose(f);
-}
-
-static void fail(const char *fmt, ...) {
-    failures++;
-    seed_failures++;
-    if (seed_failures == 1) save_prestep();
-    if (seed_failures > 5) return;
-    char buf[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    printf("FUZZ FAIL seed=%lu call=%ld: %s (last log: %s)\n", seed_now, call_now, buf, log_msg);
-    dump_ring();
-    fflush(stdout);
-}
-
-static void check(int ok, const char *fmt, ...) {
-    cnt[N_INVARIANTS]++;
-    if (ok) return;
-    char buf[900];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    fail("%s", buf);
-}
-
-static void mix(uint64_t x) { digest = (digest ^ x) * 0x100000001b3ULL; }
-static uint64_t bits(double x) {
-    uint64_t u;
-    memcpy(&u, &x, 8);
-    return u;
-}
-
-/* ---- watchdog and crash report ---- */
-static void on_signal(int sig) {
-    char buf[160];
-    int n = snprintf(buf, sizeof buf, "\nFUZZ %s seed=%lu call=%ld\n",
-                     sig == SIGALRM ? "HANG (call timeout)" : "CRASH (signal)", seed_now, call_now);
-    fflush(stdout);
-    if (write(1, buf, (size_t)n) < 0) _exit(5);
-    save_prestep();
-    dump_ring();
-    fflush(stdout);
-    _exit(sig == SIGALRM ? 3 : 4);
-}
-
-static double call_timeout = 20;
-
-static void arm(void) {
-    struct itimerval it = {{0, 0}, {(time_t)call_timeout, 0}};
-    setitimer(ITIMER_REAL, &it, NULL);
 }
 
 /* ---- logger: checks its arguments, keeps the last message ---- */
@@ -2238,25 +2142,15 @@ static void me_sequence(long ncalls) {
 }
 
 static void run_seed(unsigned long seed, long ncalls) {
-    rng_state = seed ^ 0x5eedf00d5eedf00dULL;
-    rng_state = rnd() ^ rnd(); /* decorrelate neighbouring seeds */
-    seed_now = seed;
-    seed_failures = 0;
-    digest = 0xcbf29ce484222325ULL;
-    ring_n = 0;
-    memset(cnt, 0, sizeof cnt);
+    seed_begin(seed, 0x5eedf00d5eedf00dULL);
     memset(I, 0, sizeof I);
     nbuf = 0;
-    for (call_now = 0; cnt[N_CALLS] < ncalls; call_now++) {
-        arm();
-        act();
-    }
+    run_calls(ncalls, act);
     for (int k = 0; k < 2; k++)
         if (I[k].c) free_instance(k);
     for (int j = 0; j < nbuf; j++) free(bufs[j].b), bufs[j].b = NULL;
     me_sequence(ncalls / 4);
-    struct itimerval off = {{0, 0}, {0, 0}};
-    setitimer(ITIMER_REAL, &off, NULL);
+    disarm();
     if (!quiet || seed_failures)
         printf("seed %lu: %ld calls, %ld invariant checks, invalid %ld, wrong state %ld, NaN/inf %ld, "
                "NULL %ld, bad vr %ld, extreme steps %ld, wrong tc %ld, rollbacks %ld+%ld+%ld, corrupt %ld, "
@@ -2266,39 +2160,26 @@ static void run_seed(unsigned long seed, long ncalls) {
                cnt[N_ROUNDTRIP], cnt[N_CROSS], cnt[N_CORRUPT], cnt[N_CRAFTED], cnt[N_CRAFTED_OK],
                cnt[N_REINST], cnt[N_STEPS_OK], cnt[N_DISCARD], (unsigned long long)digest,
                seed_failures ? "  FAILED" : "");
-    fflush(stdout);
-    for (int k = 0; k < N_COUNT; k++) total[k] += cnt[k];
+    seed_end();
 }
 
-int fuzz_main(const char *seeds, const char *ncalls_text) {
-    unsigned long first = 0, last = 0;
-    if (sscanf(seeds, "%lu-%lu", &first, &last) != 2) last = first = strtoul(seeds, NULL, 10);
-    long ncalls = atol(ncalls_text);
-    if (last < first || ncalls <= 0) {
-        fprintf(stderr, "fuzz: bad SEEDS or NCALLS\n");
-        return 2;
-    }
-    trace = getenv("FUZZ_TRACE") != NULL;
-    quiet = getenv("FUZZ_QUIET") != NULL;
-    if (getenv("FUZZ_CALL_TIMEOUT")) call_timeout = atof(getenv("FUZZ_CALL_TIMEOUT"));
+/* Before the first seed: the variables and the callbacks. */
+static void setup(void) {
     parse_vars();
     for (int k = 0; k < 2; k++) {
         cb_with_logger[k] = (fmi2CallbackFunctions){logger, NULL, NULL, NULL, &I[k]};
         cb_without_logger[k] = (fmi2CallbackFunctions){NULL, NULL, NULL, NULL, &I[k]};
     }
-    signal(SIGALRM, on_signal);
-    signal(SIGSEGV, on_signal);
-    signal(SIGBUS, on_signal);
-    signal(SIGFPE, on_signal);
-    signal(SIGABRT, on_signal);
-    double t0 = now();
-    for (unsigned long s = first; s <= last; s++) run_seed(s, ncalls);
-    double dt = now() - t0;
-    printf("fuzz: seeds %lu-%lu (%lu), %.2f s\n", first, last, last - first + 1, dt);
-    for (int k = 0; k < N_COUNT; k++) printf("fuzz:   %-32s %ld\n", count_name[k], total[k]);
+}
+
+int fuzz_main(const char *seeds, const char *ncalls_text) {
+    kit = (struct fuzzkit){.cnt = cnt, .total = total, .ncnt = N_COUNT, .calls = &cnt[N_CALLS],
+                           .checks = &cnt[N_INVARIANTS], .last_log = log_msg, .pending = pending,
+                           .save = save_prestep};
+    if (!fuzz_run(seeds, ncalls_text, setup, run_seed, now)) return 2;
+    print_totals(count_name, 32);
     printf("fuzz:   calls by state (oracle):");
     for (int k = 0; k < 7; k++) printf(" %s %ld%s", life_name[k], by_life[k], k < 6 ? "," : "\n");
     printf("fuzz:   smallest (x - z)/max(delta_x, |x|, |z|) seen: %.3g (bound -%g)\n", gap_min, GAP_BOUND);
-    printf("fuzz: %ld invariant violations\n", failures);
-    return failures ? 1 : 0;
+    return verdict();
 }

@@ -33,25 +33,7 @@
  * seeds and the summary.
  */
 #include "host3.h"
-
-#include <signal.h>
-#include <sys/time.h>
-#include <unistd.h>
-
-/* ---- deterministic random numbers (splitmix64) ---- */
-static uint64_t rng_state;
-
-static uint64_t rnd(void) {
-    uint64_t z = (rng_state += 0x9e3779b97f4a7c15ULL);
-    z = (z ^ (z >> 30)) * 0xbf58476d1ce4e5b9ULL;
-    z = (z ^ (z >> 27)) * 0x94d049bb133111ebULL;
-    return z ^ (z >> 31);
-}
-static double unif(void) { return (double)(rnd() >> 11) * 0x1.0p-53; }
-static double urange(double a, double b) { return a + (b - a) * unif(); }
-static double logu(double a, double b) { return exp(urange(log(a), log(b))); }
-static int chance(double p) { return unif() < p; }
-static int pick(int n) { return (int)(rnd() % (uint64_t)n); }
+#include "../fuzzkit.h"
 
 /* ---- oracle ---- */
 enum { L_NONE, L_INST, L_INIT, L_STEP, L_FAILED, L_TERM, L_ERROR, L_EVENT, L_CONT, N_LIFE };
@@ -121,7 +103,7 @@ typedef struct {
 static Buf bufs[MAXBUF];
 static int nbuf;
 
-/* ---- counters and reporting ---- */
+/* ---- counters (failures, ring of calls, watchdog: fuzzkit.h) ---- */
 enum {
     N_CALLS, N_FMI, N_INVARIANTS, N_STATE, N_INVALID, N_NULLI, N_STEPS_OK, N_EARLY, N_EVENTMODE, N_DISCARD,
     N_STEP_REFUSED, N_ROLLBACK, N_DESER, N_CORRUPT, N_REINST, N_ME_SEG, N_COUNT
@@ -135,82 +117,6 @@ static const char *count_name[] = {"calls (generated)", "FMI calls (incl. invari
 static long cnt[N_COUNT], total[N_COUNT];
 static long by_life[N_LIFE];
 static double gap_min = INFINITY;
-
-static unsigned long seed_now;
-static long call_now;
-static long failures, seed_failures;
-static int trace, quiet;
-static uint64_t digest;
-
-#define RING 48
-static char ring[RING][320];
-static long ring_n;
-
-static void note(const char *fmt, ...) {
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(ring[ring_n % RING], sizeof ring[0], fmt, ap);
-    va_end(ap);
-    if (trace) printf("  %ld: %s\n", call_now, ring[ring_n % RING]);
-    ring_n++;
-}
-
-static void dump_ring(void) {
-    long first = ring_n > RING ? ring_n - RING : 0;
-    printf("  last calls (seed %lu):\n", seed_now);
-    for (long k = first; k < ring_n; k++) printf("    %s\n", ring[k % RING]);
-}
-
-static void fail(const char *fmt, ...) {
-    failures++;
-    seed_failures++;
-    if (seed_failures > 5) return;
-    char buf[1024];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    printf("FUZZ FAIL seed=%lu call=%ld: %s (last log: %s)\n", seed_now, call_now, buf, last_msg3);
-    dump_ring();
-    fflush(stdout);
-}
-
-static void check(int ok, const char *fmt, ...) {
-    cnt[N_INVARIANTS]++;
-    if (ok) return;
-    char buf[900];
-    va_list ap;
-    va_start(ap, fmt);
-    vsnprintf(buf, sizeof buf, fmt, ap);
-    va_end(ap);
-    fail("%s", buf);
-}
-
-static void mix(uint64_t x) { digest = (digest ^ x) * 0x100000001b3ULL; }
-static uint64_t bits(double x) {
-    uint64_t u;
-    memcpy(&u, &x, 8);
-    return u;
-}
-
-/* ---- watchdog and crash report ---- */
-static void on_signal(int sig) {
-    char buf[160];
-    int n = snprintf(buf, sizeof buf, "\nFUZZ %s seed=%lu call=%ld\n",
-                     sig == SIGALRM ? "HANG (call timeout)" : "CRASH (signal)", seed_now, call_now);
-    fflush(stdout);
-    if (write(1, buf, (size_t)n) < 0) _exit(5);
-    dump_ring();
-    fflush(stdout);
-    _exit(sig == SIGALRM ? 3 : 4);
-}
-
-static double call_timeout = 20;
-
-static void arm(void) {
-    struct itimerval it = {{0, 0}, {(time_t)call_timeout, 0}};
-    setitimer(ITIMER_REAL, &it, NULL);
-}
 
 /* ---- status expectations ---- */
 static long msgs_before;
@@ -1234,58 +1140,29 @@ static void act(void) {
 }
 
 static void run_seed(unsigned long seed, long ncalls) {
-    rng_state = seed ^ 0x3eedf00d5eedf00dULL;
-    rng_state = rnd() ^ rnd();
-    seed_now = seed;
-    seed_failures = 0;
-    digest = 0xcbf29ce484222325ULL;
-    ring_n = 0;
-    memset(cnt, 0, sizeof cnt);
+    seed_begin(seed, 0x3eedf00d5eedf00dULL);
     memset(I, 0, sizeof I);
     nbuf = 0;
-    for (call_now = 0; cnt[N_CALLS] < ncalls; call_now++) {
-        arm();
-        act();
-    }
+    run_calls(ncalls, act);
     for (int k = 0; k < 2; k++) free_instance(k);
     for (int j = 0; j < nbuf; j++) free(bufs[j].b), bufs[j].b = NULL;
-    struct itimerval off = {{0, 0}, {0, 0}};
-    setitimer(ITIMER_REAL, &off, NULL);
+    disarm();
     if (!quiet || seed_failures)
         printf("seed %lu: %ld calls, %ld FMI calls, %ld invariant checks, wrong state %ld, invalid %ld, steps OK %ld, "
                "early returns %ld, event modes %ld, Discard %ld, rollbacks %ld, ME segments %ld, digest %016llx%s\n",
                seed, cnt[N_CALLS], cnt[N_FMI], cnt[N_INVARIANTS], cnt[N_STATE], cnt[N_INVALID], cnt[N_STEPS_OK],
                cnt[N_EARLY], cnt[N_EVENTMODE], cnt[N_DISCARD], cnt[N_ROLLBACK], cnt[N_ME_SEG],
                (unsigned long long)digest, seed_failures ? "  FAILED" : "");
-    fflush(stdout);
-    for (int k = 0; k < N_COUNT; k++) total[k] += cnt[k];
+    seed_end();
 }
 
 int fuzz3_main(const char *seeds, const char *ncalls_text) {
-    unsigned long first = 0, last = 0;
-    if (sscanf(seeds, "%lu-%lu", &first, &last) != 2) last = first = strtoul(seeds, NULL, 10);
-    long ncalls = atol(ncalls_text);
-    if (last < first || ncalls <= 0) {
-        fprintf(stderr, "fuzz: bad SEEDS or NCALLS\n");
-        return 2;
-    }
-    trace = getenv("FUZZ_TRACE") != NULL;
-    quiet = getenv("FUZZ_QUIET") != NULL;
-    if (getenv("FUZZ_CALL_TIMEOUT")) call_timeout = atof(getenv("FUZZ_CALL_TIMEOUT"));
-    find_vars();
-    signal(SIGALRM, on_signal);
-    signal(SIGSEGV, on_signal);
-    signal(SIGBUS, on_signal);
-    signal(SIGFPE, on_signal);
-    signal(SIGABRT, on_signal);
-    double t0 = now3();
-    for (unsigned long s = first; s <= last; s++) run_seed(s, ncalls);
-    double dt = now3() - t0;
-    printf("fuzz: seeds %lu-%lu (%lu), %.2f s\n", first, last, last - first + 1, dt);
-    for (int k = 0; k < N_COUNT; k++) printf("fuzz:   %-36s %ld\n", count_name[k], total[k]);
+    kit = (struct fuzzkit){.cnt = cnt, .total = total, .ncnt = N_COUNT, .calls = &cnt[N_CALLS],
+                           .checks = &cnt[N_INVARIANTS], .last_log = last_msg3};
+    if (!fuzz_run(seeds, ncalls_text, find_vars, run_seed, now3)) return 2;
+    print_totals(count_name, 36);
     printf("fuzz:   calls by state (oracle):");
     for (int k = 1; k < N_LIFE; k++) printf(" %s %ld%s", life_name[k], by_life[k], k < N_LIFE - 1 ? "," : "\n");
     printf("fuzz:   smallest (x - z)/max(1, |z|) seen in co-simulation: %.3g (bound -1e-9)\n", gap_min);
-    printf("fuzz: %ld invariant violations\n", failures);
-    return failures ? 1 : 0;
+    return verdict();
 }
