@@ -2,6 +2,7 @@
 classification and the same attractors, locally and on a Dask cluster."""
 
 import csv
+import json
 import subprocess
 
 import pytest
@@ -90,3 +91,46 @@ def test_basins_on_dask_match_the_cli(cli_cells):
         for k in ("period", "final_well"):
             cell[k] = None if cell[k] is None else int(cell[k])
         _same(cli_cells[(cell["x0"], cell["v0"])], cell)
+
+
+@pytest.fixture(scope="module")
+def cli_uncertainty(cli, tmp_path_factory):
+    out = tmp_path_factory.mktemp("basins") / "u.csv"
+    r = subprocess.run(
+        [
+            str(cli), "basins", "--omega", str(OMEGA), "--velocity", str(VELOCITY),
+            "--x-range", "0:1.2:10", "--v-range", "-0.6:0.6:10",
+            "--uncertainty-samples", "30", "--out", str(out), "--threads", "2", "--json",
+        ],
+        check=True,
+        capture_output=True,
+        text=True,
+    )
+    return json.loads(r.stdout)
+
+
+def test_uncertainty_exponent_matches_the_cli(cli_uncertainty):
+    pytest.importorskip("pandas")
+    distributed = pytest.importorskip("distributed")
+    xs, vs = _values(*X_RANGE), _values(*V_RANGE)
+    cells, _ = bi.sweep.basins(OMEGA, VELOCITY, xs, vs, threads=2)
+    fractions, alpha = bi.sweep.basin_uncertainty(OMEGA, VELOCITY, xs, cells, samples=30)
+    assert fractions.to_dict("records") == cli_uncertainty["uncertainty"]
+    assert alpha == cli_uncertainty["uncertainty_exponent"]
+    # Fractal boundaries here: some uncertain starts at every ε, fewer at smaller ε, α < 1.
+    f = list(fractions["fraction"])
+    assert all(x > 0 for x in f) and f == sorted(f, reverse=True) and 0 < alpha < 1
+    # The displaced starts classified on a Dask cluster give the same.
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=2, processes=False, dashboard_address=None
+    ) as cluster, distributed.Client(cluster) as client:
+        on_dask = bi.sweep.basin_uncertainty(
+            OMEGA, VELOCITY, xs, cells, samples=30, client=client, chunk=7
+        )
+    assert on_dask[0].equals(fractions) and on_dask[1] == alpha
+    # No samples: nothing measured, as `--uncertainty-samples 0`.
+    none = bi.sweep.basin_uncertainty(OMEGA, VELOCITY, xs, cells, samples=0)
+    assert len(none[0]) == 0 and list(none[0].columns) == list(fractions.columns)
+    assert none[1] is None
+    with pytest.raises(ValueError, match="'samples'"):
+        bi.sweep.basin_uncertainty(OMEGA, VELOCITY, xs, cells, samples=-1)

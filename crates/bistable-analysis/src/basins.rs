@@ -229,10 +229,80 @@ impl Uncertain {
     }
 }
 
-/// The uncertainty fraction at each `epsilon` over the sampled `cells` (each with its
-/// attractor index), displacing `x0` by `±ε` (only `+ε` where `x0 − ε` would be below the plate,
-/// at `plate_x`); the neighbours are classified on `threads` threads, `progress(done, total)`
-/// after each (returning an error cancels).
+/// Displacements `ε` of the uncertainty measurement for a grid of `n` start positions from
+/// `x_first` to `x_last`: their mean spacing (for a single position, 1 % of `max(|x0|, 1)`)
+/// and that divided by 4, 16, 64 and 256.
+pub fn uncertainty_epsilons(x_first: f64, x_last: f64, n: usize) -> Vec<f64> {
+    let step = if n > 1 {
+        ((x_last - x_first) / (n - 1) as f64).abs()
+    } else {
+        1e-2 * x_first.abs().max(1.0)
+    };
+    (0..5).map(|j| step / 4f64.powi(j)).collect()
+}
+
+/// `n` of the grid's `cells` (in grid order, with their attractor `index`), spread over the
+/// whole grid, for the uncertainty measurement.
+pub fn uncertainty_samples(cells: &[Cell], index: &[usize], n: usize) -> Vec<(Cell, usize)> {
+    crate::sweep::interleaved(cells.len())
+        .take(n.min(cells.len()))
+        .map(|i| (cells[i], index[i]))
+        .collect()
+}
+
+/// The neighbour starts of the measurement, `(ε index, sample index, x0)`: each sample's `x0`
+/// displaced by `+ε`, and by `−ε` unless that is below the plate (at `plate_x`); the velocity
+/// is the sample's.
+pub fn uncertainty_starts(
+    samples: &[(Cell, usize)],
+    epsilons: &[f64],
+    plate_x: f64,
+) -> Vec<(usize, usize, f64)> {
+    let mut starts = Vec::new();
+    for (k, &eps) in epsilons.iter().enumerate() {
+        for (i, (c, _)) in samples.iter().enumerate() {
+            starts.push((k, i, c.x0 + eps));
+            if c.x0 - eps >= plate_x {
+                starts.push((k, i, c.x0 - eps));
+            }
+        }
+    }
+    starts
+}
+
+/// The uncertainty fraction at each `ε` from the cells the neighbour `starts` reached (in the
+/// order of `starts`): a sample is uncertain when a neighbour reaches another attractor.
+/// Without samples, none (nothing was measured).
+pub fn count_uncertain(
+    attractors: &[Attractor],
+    samples: &[(Cell, usize)],
+    epsilons: &[f64],
+    starts: &[(usize, usize, f64)],
+    reached: &[Cell],
+) -> Vec<Uncertain> {
+    if samples.is_empty() {
+        return Vec::new();
+    }
+    let mut uncertain = vec![vec![false; samples.len()]; epsilons.len()];
+    for (&(k, i, _), cell) in starts.iter().zip(reached) {
+        if attractor_of(attractors, cell) != Some(samples[i].1) {
+            uncertain[k][i] = true;
+        }
+    }
+    epsilons
+        .iter()
+        .zip(uncertain)
+        .map(|(&epsilon, u)| Uncertain {
+            epsilon,
+            samples: samples.len(),
+            uncertain: u.iter().filter(|&&b| b).count(),
+        })
+        .collect()
+}
+
+/// The uncertainty fraction at each `epsilon` over the sampled cells (each with its attractor
+/// index), classifying the neighbour starts ([`uncertainty_starts`]) on `threads` threads,
+/// `progress(done, total)` after each (returning an error cancels).
 #[allow(clippy::too_many_arguments)]
 pub fn uncertainty<E>(
     model: &Model,
@@ -245,41 +315,16 @@ pub fn uncertainty<E>(
     threads: Threads,
     mut progress: impl FnMut(usize, usize) -> Result<(), E>,
 ) -> Result<Result<Vec<Uncertain>, SimError>, E> {
-    let mut jobs: Vec<(usize, usize, f64)> = Vec::new(); // (epsilon index, sample index, x0)
-    for (k, &eps) in epsilons.iter().enumerate() {
-        for (i, (c, _)) in samples.iter().enumerate() {
-            jobs.push((k, i, c.x0 + eps));
-            if c.x0 - eps >= plate_x {
-                jobs.push((k, i, c.x0 - eps));
-            }
-        }
-    }
-    let total = jobs.len();
+    let starts = uncertainty_starts(samples, epsilons, plate_x);
+    let total = starts.len();
     let results = parallel::map(
-        &jobs,
+        &starts,
         threads,
         |&(_, i, x0)| basin_cell(model, phase, x0, samples[i].0.v0, co),
         |n| progress(n, total),
     )?;
-    let mut uncertain = vec![vec![false; samples.len()]; epsilons.len()];
-    for (&(k, i, _), r) in jobs.iter().zip(results) {
-        let cell = match r {
-            Ok(c) => c,
-            Err(e) => return Ok(Err(e)),
-        };
-        if attractor_of(attractors, &cell) != Some(samples[i].1) {
-            uncertain[k][i] = true;
-        }
-    }
-    Ok(Ok(epsilons
-        .iter()
-        .zip(uncertain)
-        .map(|(&epsilon, u)| Uncertain {
-            epsilon,
-            samples: samples.len(),
-            uncertain: u.iter().filter(|&&b| b).count(),
-        })
-        .collect()))
+    let reached: Result<Vec<Cell>, SimError> = results.into_iter().collect();
+    Ok(reached.map(|r| count_uncertain(attractors, samples, epsilons, &starts, &r)))
 }
 
 /// Least-squares slope of `ln f` against `ln ε` over the points with `f > 0` (the uncertainty
@@ -360,6 +405,63 @@ mod tests {
         let e = basin_cell(&m, 0.25, z - 1e-3, 0.0, ClassifyOptions::default()).unwrap_err();
         assert!(e.to_string().contains("x0"), "{e}");
         assert!(plate_at(&m, 1.0).is_err() && plate_at(&m, f64::NAN).is_err());
+    }
+
+    #[test]
+    fn uncertainty_plan_follows_the_grid_and_the_plate() {
+        let e = uncertainty_epsilons(0.0, 1.2, 10);
+        assert_eq!(e.len(), 5);
+        for (j, &x) in e.iter().enumerate() {
+            assert!(
+                (x - 1.2 / 9.0 / 4f64.powi(j as i32)).abs() < 1e-16,
+                "{j}: {x}"
+            );
+        }
+        assert_eq!(uncertainty_epsilons(1.2, 0.0, 10), e);
+        assert_eq!(uncertainty_epsilons(-3.0, -3.0, 1)[0], 0.03);
+        assert_eq!(uncertainty_epsilons(0.5, 0.5, 1)[0], 0.01);
+        let cell = |x0: f64| Cell {
+            x0,
+            v0: 0.25,
+            outcome: Outcome {
+                class: ResponseClass::Intrawell,
+                period: Some(1),
+                chaotic: false,
+                final_well: Some(Well::One),
+            },
+            anchor: None,
+            at_rest: false,
+            periods_simulated: 1.0,
+        };
+        let samples = [(cell(0.0), 0), (cell(0.5), 1)];
+        // At x0 = 0 on a plate at 0 only x0 + ε; at 0.5 both.
+        let s = uncertainty_starts(&samples, &[0.1, 0.01], 0.0);
+        assert_eq!(
+            s,
+            vec![
+                (0, 0, 0.1),
+                (0, 1, 0.6),
+                (0, 1, 0.4),
+                (1, 0, 0.01),
+                (1, 1, 0.51),
+                (1, 1, 0.49)
+            ]
+        );
+        let (attractors, _) = identify(&[cell(0.0), cell(0.5)]);
+        let mut other = cell(0.4);
+        other.at_rest = true;
+        let reached = [
+            cell(0.1),
+            cell(0.6),
+            other,
+            cell(0.01),
+            cell(0.51),
+            cell(0.49),
+        ];
+        let idx = [(samples[0].0, 0), (samples[1].0, 0)];
+        let u = count_uncertain(&attractors, &idx, &[0.1, 0.01], &s, &reached);
+        assert_eq!((u[0].uncertain, u[1].uncertain, u[0].samples), (1, 0, 2));
+        assert!(count_uncertain(&attractors, &[], &[0.1], &[], &[]).is_empty());
     }
 
     #[test]

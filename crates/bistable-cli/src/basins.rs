@@ -11,8 +11,8 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use bistable_analysis::basins::{
-    classify_starts, identify, plate_at, uncertainty, uncertainty_exponent, Attractor, Cell,
-    Uncertain,
+    classify_starts, identify, plate_at, uncertainty, uncertainty_epsilons, uncertainty_exponent,
+    uncertainty_samples, Attractor, Cell, Uncertain,
 };
 use bistable_analysis::sensitivity::Outcome;
 use bistable_analysis::sweep::interleaved;
@@ -316,17 +316,8 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     let (attractors, index) = identify(&cells);
 
     // Uncertainty fraction on a spread sample of cells.
-    let n_samples = args.uncertainty_samples.min(cells.len());
-    let samples: Vec<(Cell, usize)> = interleaved(cells.len())
-        .take(n_samples)
-        .map(|i| (cells[i], index[i]))
-        .collect();
-    let step = if xs.n > 1 {
-        xs.step().abs()
-    } else {
-        1e-2 * (xlo.abs().max(1.0))
-    };
-    let epsilons: Vec<f64> = (0..5).map(|j| step / 4f64.powi(j)).collect();
+    let samples = uncertainty_samples(&cells, &index, args.uncertainty_samples);
+    let epsilons = uncertainty_epsilons(xs.start, xs.end, xs.n);
     let unc: Vec<Uncertain> = if samples.is_empty() {
         Vec::new()
     } else {

@@ -4,12 +4,15 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use bistable_analysis::basins::{basin_cell, identify, plate_at, Cell};
+use bistable_analysis::basins::{
+    basin_cell, count_uncertain, identify, plate_at, uncertainty_epsilons, uncertainty_exponent,
+    uncertainty_samples, uncertainty_starts, Attractor, Cell,
+};
 use bistable_analysis::sensitivity::Outcome;
 use bistable_analysis::Threads;
 use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
 
-use crate::common::{invalid, model, param_err, sim_err};
+use crate::common::{invalid, invalid_text, model, param_err, sim_err};
 
 fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -160,4 +163,156 @@ pub fn basin_attractors<'py>(
         out.append(d)?;
     }
     Ok((out, index.into_iter().map(|i| i + 1).collect()))
+}
+
+/// What the uncertainty measurement of a basin grid is made of, as `bistable basins` chooses
+/// it: the attractors of `cells`, the sampled cells, the displacements and the neighbour starts.
+struct Plan {
+    attractors: Vec<Attractor>,
+    samples: Vec<(Cell, usize)>,
+    epsilons: Vec<f64>,
+    starts: Vec<(usize, usize, f64)>,
+}
+
+#[allow(clippy::too_many_arguments)]
+fn plan(
+    py: Python<'_>,
+    omega: f64,
+    velocity: f64,
+    phase: f64,
+    cells: &[Bound<'_, PyDict>],
+    samples: usize,
+    x_first: f64,
+    x_last: f64,
+    nx: usize,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+) -> PyResult<Plan> {
+    let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
+    let (plate_x, _) = plate_at(&m, phase).map_err(|e| param_err(py, &e))?;
+    if nx == 0 {
+        return Err(invalid(py, "x0", 0.0, "needs at least one value"));
+    }
+    for (name, x) in [("x0", x_first), ("x0", x_last)] {
+        if !x.is_finite() {
+            return Err(invalid(py, name, x, "must be finite"));
+        }
+    }
+    let cells: Vec<Cell> = cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let (attractors, index) = identify(&cells);
+    let samples = uncertainty_samples(&cells, &index, samples);
+    let epsilons = uncertainty_epsilons(x_first, x_last, nx);
+    let starts = uncertainty_starts(&samples, &epsilons, plate_x);
+    Ok(Plan {
+        attractors,
+        samples,
+        epsilons,
+        starts,
+    })
+}
+
+/// The neighbour starts `(x0, v0)` of the uncertainty measurement of the basin grid whose
+/// start positions run from `x_first` to `x_last` in `nx` values and whose cells (dicts of
+/// [`basin_cells`], in grid order) are `cells`: `samples` cells spread over the grid, each
+/// displaced by `±ε` in `x0` (see `bistable_analysis::basins`).
+#[pyfunction]
+#[pyo3(signature = (omega, velocity, phase, cells, samples, x_first, x_last, nx, zeta=0.02,
+    restitution=0.85, tol=1e-16, chatter="accumulation"))]
+#[allow(clippy::too_many_arguments)]
+pub fn basin_uncertainty_starts<'py>(
+    py: Python<'py>,
+    omega: f64,
+    velocity: f64,
+    phase: f64,
+    cells: Vec<Bound<'py, PyDict>>,
+    samples: usize,
+    x_first: f64,
+    x_last: f64,
+    nx: usize,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+) -> PyResult<Vec<(f64, f64)>> {
+    let p = plan(
+        py,
+        omega,
+        velocity,
+        phase,
+        &cells,
+        samples,
+        x_first,
+        x_last,
+        nx,
+        zeta,
+        restitution,
+        tol,
+        chatter,
+    )?;
+    Ok(p.starts
+        .iter()
+        .map(|&(_, i, x0)| (x0, p.samples[i].0.v0))
+        .collect())
+}
+
+/// The uncertainty fractions (dicts `epsilon`, `samples`, `uncertain`, `fraction`, largest
+/// `ε` first) and exponent (`None` with fewer than two fractions above zero), from `reached`:
+/// the cells (dicts of [`basin_cells`]) of the starts of [`basin_uncertainty_starts`] with the
+/// same arguments, in its order.
+#[pyfunction]
+#[pyo3(signature = (omega, velocity, phase, cells, samples, x_first, x_last, nx, reached,
+    zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation"))]
+#[allow(clippy::too_many_arguments)]
+pub fn basin_uncertainty<'py>(
+    py: Python<'py>,
+    omega: f64,
+    velocity: f64,
+    phase: f64,
+    cells: Vec<Bound<'py, PyDict>>,
+    samples: usize,
+    x_first: f64,
+    x_last: f64,
+    nx: usize,
+    reached: Vec<Bound<'py, PyDict>>,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+) -> PyResult<(Bound<'py, PyList>, Option<f64>)> {
+    let p = plan(
+        py,
+        omega,
+        velocity,
+        phase,
+        &cells,
+        samples,
+        x_first,
+        x_last,
+        nx,
+        zeta,
+        restitution,
+        tol,
+        chatter,
+    )?;
+    if reached.len() != p.starts.len() {
+        return Err(invalid_text(
+            "reached",
+            reached.len(),
+            &format!("must hold one cell per start ({})", p.starts.len()),
+        ));
+    }
+    let reached: Vec<Cell> = reached.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let unc = count_uncertain(&p.attractors, &p.samples, &p.epsilons, &p.starts, &reached);
+    let out = PyList::empty(py);
+    for u in &unc {
+        let d = PyDict::new(py);
+        d.set_item("epsilon", u.epsilon)?;
+        d.set_item("samples", u.samples)?;
+        d.set_item("uncertain", u.uncertain)?;
+        d.set_item("fraction", u.fraction())?;
+        out.append(d)?;
+    }
+    Ok((out, uncertainty_exponent(&unc)))
 }

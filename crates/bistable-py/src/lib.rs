@@ -46,6 +46,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(spectrum::spectrum, m)?)?;
     m.add_function(wrap_pyfunction!(basins::basin_cells, m)?)?;
     m.add_function(wrap_pyfunction!(basins::basin_attractors, m)?)?;
+    m.add_function(wrap_pyfunction!(basins::basin_uncertainty_starts, m)?)?;
+    m.add_function(wrap_pyfunction!(basins::basin_uncertainty, m)?)?;
     m.add_function(wrap_pyfunction!(linspace, m)?)?;
     // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;

@@ -197,12 +197,6 @@ def basin_cells(
     chatter: str = "accumulation",
     max_periods: float = 2000.0,
     lyapunov_periods: int = 300,
-    repeats: Optional[int] = None,
-    efoldings: Optional[float] = None,
-    perturbation: Optional[float] = None,
-    horizon: Optional[float] = None,
-    repeat_periods: Optional[float] = None,
-    lyapunov_windows: Optional[int] = None,
     threads: int = 0,
     check_only: bool = False,
 ) -> List[Dict[str, Any]]: ...
@@ -210,3 +204,33 @@ def basin_cells(
 def basin_attractors(
     cells: List[Dict[str, Any]],
 ) -> Tuple[List[Dict[str, Any]], List[int]]: ...
+
+def basin_uncertainty_starts(
+    omega: float,
+    velocity: float,
+    phase: float,
+    cells: List[Dict[str, Any]],
+    samples: int,
+    x_first: float,
+    x_last: float,
+    nx: int,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> List[Tuple[float, float]]: ...
+def basin_uncertainty(
+    omega: float,
+    velocity: float,
+    phase: float,
+    cells: List[Dict[str, Any]],
+    samples: int,
+    x_first: float,
+    x_last: float,
+    nx: int,
+    reached: List[Dict[str, Any]],
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> Tuple[List[Dict[str, Any]], Optional[float]]: ...

@@ -53,7 +53,7 @@ def basins(
     ``attractor``, the attractor's number from 1), ordered with ``v0`` outer and ``x0`` inner as
     the CLI's grid, and a list of dicts, one per attractor, largest basin first (``number``,
     ``label``, ``period``, ``chaotic``, ``final_well``, ``anchor``, ``cells``, ``fraction``...).
-    The uncertainty exponent is computed by the CLI only.
+    :func:`basin_uncertainty` measures the uncertainty exponent of the result.
 
     Args:
         x0, v0: the grid's start positions (not below the plate at ``phase``) and velocities.
@@ -99,3 +99,76 @@ def basins(
         df[c] = df[c].astype("Int64")
     return df, attractors
 
+
+
+def basin_uncertainty(
+    omega: float,
+    velocity: float,
+    x0: Sequence[float],
+    cells: Any,
+    phase: float = 0.0,
+    samples: int = 400,
+    client: Any = None,
+    chunk: int = 64,
+    threads: int = 0,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 2000.0,
+    lyapunov_periods: int = 300,
+):
+    """The uncertainty exponent of the basins (Grebogi, McDonald, Ott & Yorke 1983), measured
+    as ``bistable basins`` measures it: ``samples`` cells spread over the grid, each
+    *ε-uncertain* when its start displaced by ``±ε`` in ``x0`` reaches another attractor, at
+    ``ε`` = the grid's ``x0`` spacing divided by 1, 4, 16, 64 and 256; ``α`` is the
+    least-squares slope of ``ln f(ε)`` against ``ln ε`` (``α = 1``: smooth boundaries,
+    ``α < 1``: fractal, of box-counting dimension ``2 − α``).
+
+    Args:
+        omega, velocity, phase, x0: as given to :func:`basins` for ``cells``.
+        cells: the cells DataFrame that :func:`basins` returned for the grid ``x0 × v0``.
+        samples: cells sampled (>= 0; at most all of them).
+        client, chunk, threads: where the displaced starts are classified, as in
+            :func:`basins`.
+        Other arguments: the model and classification options given to :func:`basins`.
+
+    Returns ``(fractions, alpha)``: a pandas DataFrame with ``epsilon, samples, uncertain,
+    fraction``, one row per ``ε`` (largest first), and ``α`` (``None`` when fewer than two
+    fractions are above zero), the ``uncertainty`` and ``uncertainty_exponent`` of
+    ``bistable basins --json``.
+    """
+    import pandas as pd
+
+    if not (isinstance(samples, int) and samples >= 0):
+        raise ValueError(f"invalid value {samples!r} for 'samples': must be an integer >= 0")
+    if not (isinstance(chunk, int) and chunk >= 1):
+        raise ValueError(f"invalid value {chunk!r} for 'chunk': must be an integer >= 1")
+    xs = np.atleast_1d(np.asarray(x0, dtype=float))
+    model = dict(zeta=zeta, restitution=restitution, tol=tol, chatter=chatter)
+    options = dict(model, max_periods=max_periods, lyapunov_periods=lyapunov_periods)
+    records = [
+        {k: (None if pd.isna(v) else v.item() if hasattr(v, "item") else v) for k, v in r.items()}
+        for r in cells[list(CELL_COLUMNS)].to_dict("records")
+    ]
+    grid = (omega, velocity, phase, records, samples, float(xs[0]), float(xs[-1]), len(xs))
+    starts = _native.basin_uncertainty_starts(*grid, **model)
+    # Checks the classification options before any work.
+    _native.basin_cells(omega, velocity, phase, [], check_only=True, **options)
+    if client is None:
+        reached = _native.basin_cells(omega, velocity, phase, starts, threads=threads, **options)
+    else:
+        parts = [starts[i : i + chunk] for i in range(0, len(starts), chunk)]
+        futures = client.map(
+            _cells_chunk,
+            parts,
+            omega=omega,
+            velocity=velocity,
+            phase=phase,
+            options=options,
+            pure=False,
+        )
+        reached = [c for part in client.gather(futures) for c in part]
+    fractions, alpha = _native.basin_uncertainty(*grid, reached, **model)
+    columns = ["epsilon", "samples", "uncertain", "fraction"]
+    return pd.DataFrame.from_records(fractions, columns=columns), alpha

@@ -191,4 +191,4 @@ def map(
 
 
 # Basins of attraction (`bistable basins`), kept in their own module.
-from .basins import basins  # noqa: E402,F401
+from .basins import basin_uncertainty, basins  # noqa: E402,F401
