@@ -165,8 +165,29 @@ pub fn basin_attractors<'py>(
     Ok((out, index.into_iter().map(|i| i + 1).collect()))
 }
 
-/// What the uncertainty measurement of a basin grid is made of, as `bistable basins` chooses
-/// it: the attractors of `cells`, the sampled cells, the displacements and the neighbour starts.
+/// A basin grid as the uncertainty measurement sees it, a dict from Python: the shaker point,
+/// the phase and model options given to [`basin_cells`], its cells (dicts of [`basin_cells`],
+/// in grid order), the start positions' range (`x_first` to `x_last` in `nx` values) and the
+/// number of cells to sample.
+#[derive(FromPyObject)]
+#[pyo3(from_item_all)]
+pub struct Grid<'py> {
+    omega: f64,
+    velocity: f64,
+    phase: f64,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: String,
+    cells: Vec<Bound<'py, PyDict>>,
+    samples: usize,
+    x_first: f64,
+    x_last: f64,
+    nx: usize,
+}
+
+/// What the measurement is made of, as `bistable basins` chooses it: the attractors of the
+/// cells, the sampled cells, the displacements and the neighbour starts.
 struct Plan {
     attractors: Vec<Attractor>,
     samples: Vec<(Cell, usize)>,
@@ -174,36 +195,29 @@ struct Plan {
     starts: Vec<(usize, usize, f64)>,
 }
 
-#[allow(clippy::too_many_arguments)]
-fn plan(
-    py: Python<'_>,
-    omega: f64,
-    velocity: f64,
-    phase: f64,
-    cells: &[Bound<'_, PyDict>],
-    samples: usize,
-    x_first: f64,
-    x_last: f64,
-    nx: usize,
-    zeta: f64,
-    restitution: f64,
-    tol: f64,
-    chatter: &str,
-) -> PyResult<Plan> {
-    let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
-    let (plate_x, _) = plate_at(&m, phase).map_err(|e| param_err(py, &e))?;
-    if nx == 0 {
+fn plan(py: Python<'_>, g: &Grid<'_>) -> PyResult<Plan> {
+    let m = model(
+        py,
+        g.omega,
+        g.velocity,
+        g.zeta,
+        g.restitution,
+        g.tol,
+        &g.chatter,
+    )?;
+    let (plate_x, _) = plate_at(&m, g.phase).map_err(|e| param_err(py, &e))?;
+    if g.nx == 0 {
         return Err(invalid(py, "x0", 0.0, "needs at least one value"));
     }
-    for (name, x) in [("x0", x_first), ("x0", x_last)] {
+    for x in [g.x_first, g.x_last] {
         if !x.is_finite() {
-            return Err(invalid(py, name, x, "must be finite"));
+            return Err(invalid(py, "x0", x, "must be finite"));
         }
     }
-    let cells: Vec<Cell> = cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let cells: Vec<Cell> = g.cells.iter().map(cell_from).collect::<PyResult<_>>()?;
     let (attractors, index) = identify(&cells);
-    let samples = uncertainty_samples(&cells, &index, samples);
-    let epsilons = uncertainty_epsilons(x_first, x_last, nx);
+    let samples = uncertainty_samples(&cells, &index, g.samples);
+    let epsilons = uncertainty_epsilons(g.x_first, g.x_last, g.nx);
     let starts = uncertainty_starts(&samples, &epsilons, plate_x);
     Ok(Plan {
         attractors,
@@ -213,44 +227,12 @@ fn plan(
     })
 }
 
-/// The neighbour starts `(x0, v0)` of the uncertainty measurement of the basin grid whose
-/// start positions run from `x_first` to `x_last` in `nx` values and whose cells (dicts of
-/// [`basin_cells`], in grid order) are `cells`: `samples` cells spread over the grid, each
-/// displaced by `±ε` in `x0` (see `bistable_analysis::basins`).
+/// The neighbour starts `(x0, v0)` of the uncertainty measurement of `grid` ([`Grid`]): its
+/// sampled cells spread over the grid, each displaced by `±ε` in `x0` (see
+/// `bistable_analysis::basins`).
 #[pyfunction]
-#[pyo3(signature = (omega, velocity, phase, cells, samples, x_first, x_last, nx, zeta=0.02,
-    restitution=0.85, tol=1e-16, chatter="accumulation"))]
-#[allow(clippy::too_many_arguments)]
-pub fn basin_uncertainty_starts<'py>(
-    py: Python<'py>,
-    omega: f64,
-    velocity: f64,
-    phase: f64,
-    cells: Vec<Bound<'py, PyDict>>,
-    samples: usize,
-    x_first: f64,
-    x_last: f64,
-    nx: usize,
-    zeta: f64,
-    restitution: f64,
-    tol: f64,
-    chatter: &str,
-) -> PyResult<Vec<(f64, f64)>> {
-    let p = plan(
-        py,
-        omega,
-        velocity,
-        phase,
-        &cells,
-        samples,
-        x_first,
-        x_last,
-        nx,
-        zeta,
-        restitution,
-        tol,
-        chatter,
-    )?;
+pub fn basin_uncertainty_starts(py: Python<'_>, grid: Grid<'_>) -> PyResult<Vec<(f64, f64)>> {
+    let p = plan(py, &grid)?;
     Ok(p.starts
         .iter()
         .map(|&(_, i, x0)| (x0, p.samples[i].0.v0))
@@ -258,44 +240,16 @@ pub fn basin_uncertainty_starts<'py>(
 }
 
 /// The uncertainty fractions (dicts `epsilon`, `samples`, `uncertain`, `fraction`, largest
-/// `ε` first) and exponent (`None` with fewer than two fractions above zero), from `reached`:
-/// the cells (dicts of [`basin_cells`]) of the starts of [`basin_uncertainty_starts`] with the
-/// same arguments, in its order.
+/// `ε` first; none without samples) and exponent (`None` with fewer than two fractions above
+/// zero) of `grid`, from `reached`: the cells (dicts of [`basin_cells`]) of the starts of
+/// [`basin_uncertainty_starts`], in its order.
 #[pyfunction]
-#[pyo3(signature = (omega, velocity, phase, cells, samples, x_first, x_last, nx, reached,
-    zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation"))]
-#[allow(clippy::too_many_arguments)]
 pub fn basin_uncertainty<'py>(
     py: Python<'py>,
-    omega: f64,
-    velocity: f64,
-    phase: f64,
-    cells: Vec<Bound<'py, PyDict>>,
-    samples: usize,
-    x_first: f64,
-    x_last: f64,
-    nx: usize,
+    grid: Grid<'py>,
     reached: Vec<Bound<'py, PyDict>>,
-    zeta: f64,
-    restitution: f64,
-    tol: f64,
-    chatter: &str,
 ) -> PyResult<(Bound<'py, PyList>, Option<f64>)> {
-    let p = plan(
-        py,
-        omega,
-        velocity,
-        phase,
-        &cells,
-        samples,
-        x_first,
-        x_last,
-        nx,
-        zeta,
-        restitution,
-        tol,
-        chatter,
-    )?;
+    let p = plan(py, &grid)?;
     if reached.len() != p.starts.len() {
         return Err(invalid_text(
             "reached",

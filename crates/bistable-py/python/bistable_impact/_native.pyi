@@ -205,32 +205,10 @@ def basin_attractors(
     cells: List[Dict[str, Any]],
 ) -> Tuple[List[Dict[str, Any]], List[int]]: ...
 
-def basin_uncertainty_starts(
-    omega: float,
-    velocity: float,
-    phase: float,
-    cells: List[Dict[str, Any]],
-    samples: int,
-    x_first: float,
-    x_last: float,
-    nx: int,
-    zeta: float = 0.02,
-    restitution: float = 0.85,
-    tol: float = 1e-16,
-    chatter: str = "accumulation",
-) -> List[Tuple[float, float]]: ...
+def basin_uncertainty_starts(grid: Dict[str, Any]) -> List[Tuple[float, float]]:
+    """``grid``: omega, velocity, phase, zeta, restitution, tol, chatter, cells, samples,
+    x_first, x_last, nx."""
+    ...
 def basin_uncertainty(
-    omega: float,
-    velocity: float,
-    phase: float,
-    cells: List[Dict[str, Any]],
-    samples: int,
-    x_first: float,
-    x_last: float,
-    nx: int,
-    reached: List[Dict[str, Any]],
-    zeta: float = 0.02,
-    restitution: float = 0.85,
-    tol: float = 1e-16,
-    chatter: str = "accumulation",
+    grid: Dict[str, Any], reached: List[Dict[str, Any]]
 ) -> Tuple[List[Dict[str, Any]], Optional[float]]: ...

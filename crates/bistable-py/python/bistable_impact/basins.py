@@ -29,6 +29,26 @@ def _cells_chunk(starts, omega, velocity, phase, options):
     return _native.basin_cells(omega, velocity, phase, starts, threads=1, **options)
 
 
+def _classify_starts(omega, velocity, phase, starts, options, client, chunk, threads):
+    """The cells of ``starts``: on ``threads`` Rust threads here, or on a Dask ``client`` in
+    tasks of ``chunk`` starts; the options, the phase and every start (not below the plate) are
+    checked before any work."""
+    _native.basin_cells(omega, velocity, phase, starts, check_only=True, **options)
+    if client is None:
+        return _native.basin_cells(omega, velocity, phase, starts, threads=threads, **options)
+    parts = [starts[i : i + chunk] for i in range(0, len(starts), chunk)]
+    futures = client.map(
+        _cells_chunk,
+        parts,
+        omega=omega,
+        velocity=velocity,
+        phase=phase,
+        options=options,
+        pure=False,
+    )
+    return [c for part in client.gather(futures) for c in part]
+
+
 def basins(
     omega: float,
     velocity: float,
@@ -76,22 +96,7 @@ def basins(
     xs = np.atleast_1d(np.asarray(x0, dtype=float))
     vs = np.atleast_1d(np.asarray(v0, dtype=float))
     starts = [(float(a), float(b)) for b in vs for a in xs]
-    # Checks the options, the phase and every start (not below the plate) before any work.
-    _native.basin_cells(omega, velocity, phase, starts, check_only=True, **options)
-    if client is None:
-        cells = _native.basin_cells(omega, velocity, phase, starts, threads=threads, **options)
-    else:
-        parts = [starts[i : i + chunk] for i in range(0, len(starts), chunk)]
-        futures = client.map(
-            _cells_chunk,
-            parts,
-            omega=omega,
-            velocity=velocity,
-            phase=phase,
-            options=options,
-            pure=False,
-        )
-        cells = [c for part in client.gather(futures) for c in part]
+    cells = _classify_starts(omega, velocity, phase, starts, options, client, chunk, threads)
     attractors, index = _native.basin_attractors(cells)
     df = pd.DataFrame.from_records(cells, columns=list(CELL_COLUMNS))
     df["attractor"] = index
@@ -151,24 +156,19 @@ def basin_uncertainty(
         {k: (None if pd.isna(v) else v.item() if hasattr(v, "item") else v) for k, v in r.items()}
         for r in cells[list(CELL_COLUMNS)].to_dict("records")
     ]
-    grid = (omega, velocity, phase, records, samples, float(xs[0]), float(xs[-1]), len(xs))
-    starts = _native.basin_uncertainty_starts(*grid, **model)
-    # Checks the classification options before any work.
-    _native.basin_cells(omega, velocity, phase, [], check_only=True, **options)
-    if client is None:
-        reached = _native.basin_cells(omega, velocity, phase, starts, threads=threads, **options)
-    else:
-        parts = [starts[i : i + chunk] for i in range(0, len(starts), chunk)]
-        futures = client.map(
-            _cells_chunk,
-            parts,
-            omega=omega,
-            velocity=velocity,
-            phase=phase,
-            options=options,
-            pure=False,
-        )
-        reached = [c for part in client.gather(futures) for c in part]
-    fractions, alpha = _native.basin_uncertainty(*grid, reached, **model)
+    grid = dict(
+        model,
+        omega=omega,
+        velocity=velocity,
+        phase=phase,
+        cells=records,
+        samples=samples,
+        x_first=float(xs[0]),
+        x_last=float(xs[-1]),
+        nx=len(xs),
+    )
+    starts = _native.basin_uncertainty_starts(grid)
+    reached = _classify_starts(omega, velocity, phase, starts, options, client, chunk, threads)
+    fractions, alpha = _native.basin_uncertainty(grid, reached)
     columns = ["epsilon", "samples", "uncertain", "fraction"]
     return pd.DataFrame.from_records(fractions, columns=columns), alpha
