@@ -150,14 +150,18 @@ mod tests {
     #[test]
     fn sensitivity_defaults_are_the_librarys() {
         use bistable_analysis::sensitivity::SensitivityOptions;
-        for sub in ["classify", "map"] {
-            let mut args = vec!["bistable", sub, "--omega", "1", "--velocity", "0.1"];
-            if sub == "map" {
-                args = vec!["bistable", sub, "--omega-range", "1:2:2"];
-                args.extend(["--velocity-range", "0.1:0.2:2", "--out", "m.csv"]);
-            }
-            let parsed = Cli::try_parse_from(&args).unwrap();
-            let so = match parsed.command {
+        let point = ["--omega", "1", "--velocity", "0.1"];
+        let grid = [
+            "--omega-range",
+            "1:2:2",
+            "--velocity-range",
+            "0.1:0.2:2",
+            "--out",
+            "m.csv",
+        ];
+        for (sub, rest) in [("classify", &point[..]), ("map", &grid[..])] {
+            let args = ["bistable", sub].into_iter().chain(rest.iter().copied());
+            let so = match Cli::try_parse_from(args).unwrap().command {
                 Command::Classify(a) => a.classify.sensitivity(),
                 Command::Map(a) => a.classify.sensitivity(),
                 _ => unreachable!(),

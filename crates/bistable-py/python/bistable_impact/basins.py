@@ -105,7 +105,6 @@ def basins(
     return df, attractors
 
 
-
 def basin_uncertainty(
     omega: float,
     velocity: float,
