@@ -16,11 +16,13 @@
 #![warn(missing_docs)]
 
 pub mod audit;
+pub mod batch;
 mod chatter;
 pub mod checkpoint;
 pub mod classify;
 pub mod codec;
 pub mod events;
+pub mod lanes;
 pub mod params;
 pub mod potential;
 pub mod ramp;
@@ -33,12 +35,14 @@ pub mod taylor;
 pub mod time;
 
 pub use audit::GapAudit;
+pub use batch::{Batch, JoinError, LaneObserver};
 pub use checkpoint::{Checkpoint, PlateRecord};
 pub use classify::{
     classify, classify_from, largest_lyapunov, Classification, ClassifyOptions, ResponseClass,
     Tracking,
 };
 pub use events::{ContactMode, Event, Impact, StickCause, Well};
+pub use lanes::Width;
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use ramp::SetpointRamp;
 pub use sampled::{Sample, SampleHistory};

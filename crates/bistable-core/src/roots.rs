@@ -7,6 +7,7 @@
 //! polished to the last bit by safeguarded Newton iteration. A minimum that touches zero (grazing)
 //! survives halving down to a width of `2^-44` of the step and is reported as a root there.
 
+use crate::lanes::Lane;
 use crate::taylor::{eval, BUF};
 
 /// Width (as a fraction of the step) below which an uncleared interval is reported as a touch.
@@ -36,6 +37,52 @@ pub(crate) fn first_root(c: &[f64], h: f64) -> Option<f64> {
     }
     bernstein(&mut d[..=n]);
     search(c, h, &d[..=n], 0.0, 1.0)
+}
+
+/// [`first_root`] past its certificates, from the Bernstein coefficients `b` of `p(hσ)` on
+/// `σ ∈ [0, 1]` (as [`first_root`] converts them).
+pub(crate) fn first_root_from(c: &[f64], h: f64, b: &[f64]) -> Option<f64> {
+    search(c, h, b, 0.0, 1.0)
+}
+
+/// The cheap certificates of [`first_root`] in each lane of a batch: `true` in a lane whose
+/// polynomial `Σ c_k s^k` (`c[0] > 0`, degree `c.len() − 1 > LOW_DEGREE`) [`first_root`]
+/// certifies root-free on `[0, h]` without a search, with the same operations, so that it
+/// would return `None` there; `false` leaves the lane to [`first_root`].
+/// Also returns, in `bern`, the Bernstein coefficients that [`first_root`] converts next.
+#[inline(always)]
+pub(crate) fn certified_clear<T: Lane>(c: &[T], h: T, bern: &mut [T; BUF]) -> T::Mask {
+    let n = c.len() - 1;
+    debug_assert!(n > LOW_DEGREE);
+    let zero = T::splat(0.0);
+    let mut d = [zero; BUF];
+    let mut hk = T::splat(1.0);
+    for (dk, &ck) in d.iter_mut().zip(c) {
+        *dk = ck * hk;
+        hk *= h;
+    }
+    let tail = d[3..=n]
+        .iter()
+        .fold(T::splat(-0.0), |t, &v| t + v.min(zero));
+    let (a, b, q) = (d[0], d[1], d[2]);
+    let ends = a.min(a + b + q);
+    let inner = T::and(T::and(q.gt(zero), b.lt(zero)), (-b).lt(T::splat(2.0) * q));
+    let least = T::select(inner, ends.min(a - b * b / (T::splat(4.0) * q)), ends);
+    let quadratic = (least + tail).gt(zero);
+    // The second certificate, as `clearly_positive`.
+    let size = d[..=n].iter().fold(T::splat(-0.0), |t, &v| t + v.abs());
+    let tail = d[LOW_DEGREE + 1..=n]
+        .iter()
+        .fold(T::splat(-0.0), |t, &v| t + v.min(zero));
+    let mut low = [zero; LOW_DEGREE + 1];
+    low.copy_from_slice(&d[..=LOW_DEGREE]);
+    bernstein(&mut low);
+    let least = low.iter().fold(T::splat(f64::INFINITY), |m, &v| m.min(v));
+    let sized = size.gt(T::splat(1e-200));
+    let clear = T::and(sized, (least + tail).gt(T::splat(1e-11) * size));
+    bern[..=n].copy_from_slice(&d[..=n]);
+    bernstein(&mut bern[..=n]);
+    T::or(quadratic, clear)
 }
 
 /// Degree of the part of the polynomial whose Bernstein coefficients [`clearly_positive`] takes.
@@ -104,10 +151,11 @@ fn quadratic_min(a: f64, b: f64, c: f64) -> f64 {
 
 /// Bernstein coefficients of `Σ d_k σ^k` on `[0, 1]`, in place: `b_i = Σ_{k≤i} C(i,k) d_k/C(n,k)`,
 /// by the additive triangle (pass `j` adds each coefficient's left neighbour for `i ≥ j`).
-fn bernstein(d: &mut [f64]) {
+#[inline(always)]
+fn bernstein<T: Lane>(d: &mut [T]) {
     let n = d.len() - 1;
     for (dk, &inv) in d.iter_mut().zip(&INV_BINOM[n]) {
-        *dk *= inv;
+        *dk *= T::splat(inv);
     }
     // Passes j and j + 1 together: for i > j, (b_i + b_{i−1}) + (b_{i−1} + b_{i−2}) from the
     // old values, descending (in blocks of four) so that these are still the old ones.

@@ -336,6 +336,18 @@ impl PlateEval {
         }
     }
 
+    /// Sine and cosine of the sinusoid `s`'s phase angle at `t` (as [`PlateEval::series`]
+    /// takes them; `s` is the motion evaluated).
+    pub(crate) fn sin_cos(&mut self, s: &Sinusoid, t: Instant) -> (f64, f64) {
+        let (_, sn, cs) = self.trig(s, t);
+        (sn, cs)
+    }
+
+    /// A sinusoid's coefficient magnitudes `(V/Ω) Ω^k/k!` (zero for a polynomial piece).
+    pub(crate) fn magnitudes(&self) -> &[f64; BUF] {
+        &self.mags
+    }
+
     /// [`PlateMotion::series`]; `out` is at most `BUF` long.
     pub(crate) fn series(&mut self, t: Instant, out: &mut [f64]) {
         match self.plate {

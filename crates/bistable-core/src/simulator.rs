@@ -14,7 +14,7 @@ use crate::checkpoint::{Checkpoint, PlateRecord};
 use crate::events::{ContactMode, Event, Impact, StickCause, Well};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
-use crate::roots::first_root;
+use crate::roots::{first_root, first_root_from};
 #[cfg(doc)]
 use crate::shaker::Sinusoid;
 use crate::shaker::{PlateEval, PlateMotion};
@@ -222,6 +222,45 @@ enum StepEnd {
     Stick(StickCause),
 }
 
+/// What a batch needs from a lane to compute its next free step ([`Simulator::lane_start`]).
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct LaneStart {
+    /// Gap and gap rate at the step's start.
+    pub u0: f64,
+    pub w0: f64,
+    /// Sine and cosine of the plate's phase angle there.
+    pub sin: f64,
+    pub cos: f64,
+    /// The sinusoid's mean position.
+    pub offset: f64,
+    /// The step starts on the plate (`u0 = 0`, `w0 > 0`, the gap's root there divided out).
+    pub leaving: bool,
+    /// In well 2 (the barrier is below).
+    pub above: bool,
+    /// The step starts on the barrier.
+    pub on_barrier: bool,
+    /// Start of the variational series, when they are integrated.
+    pub phi: Option<[[f64; 2]; 2]>,
+}
+
+/// A batch kernel's verdict on one lane's free step ([`Simulator::take_lane_step`]).
+#[derive(Clone, Copy)]
+pub(crate) struct LaneEnd {
+    /// Every coefficient of `x` is finite.
+    pub finite: bool,
+    /// Step size (before any event).
+    pub h: f64,
+    /// The gap certified root-free over `h`.
+    pub clear: bool,
+    /// The barrier certified out of reach over `h`.
+    pub far: bool,
+    /// Gap and gap rate at `h`.
+    pub end_gap: (f64, f64),
+    /// Bernstein coefficients of the gap over `[0, h]` (orders `0..=order + 1`; valid where
+    /// the step does not leave the plate).
+    pub bernstein: [f64; BUF],
+}
+
 #[derive(Clone)]
 struct Step {
     len: f64,
@@ -230,6 +269,18 @@ struct Step {
     riding: bool,
     /// Series of `x` and of the gap over the step (of the plate, while riding).
     series: FlightSeries,
+    /// Gap and gap rate at the end of a free step, when a batch computed them with the step
+    /// (the values `finish_step` would compute).
+    end_gap: Option<(f64, f64)>,
+}
+
+/// Where an advance stands after [`Simulator::resume`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub(crate) enum Progress {
+    /// The next step has to be computed ([`Simulator::compute_step`], or a batch's kernel).
+    NeedStep,
+    /// The advance is over: the target was reached (`true`) or the observer stopped it.
+    Stopped(bool),
 }
 
 /// The event-driven simulator (see the module documentation).
@@ -260,6 +311,8 @@ pub struct Simulator {
     last_impact: Option<Impact>,
     last_impact_t: Option<Instant>,
     short_flights: u32,
+    /// Consecutive empty steps in the current advance (a guard against a standstill).
+    empty_steps: u32,
     stats: Stats,
     /// Variational state, when enabled: `Φ(t0)` and, for the current free step, the series of
     /// its two columns' `δx`.
@@ -359,12 +412,14 @@ impl Simulator {
                 end: StepEnd::Plain,
                 riding: false,
                 series: FlightSeries::default(),
+                end_gap: None,
             },
             live: false,
             now: t0,
             last_impact: None,
             last_impact_t: None,
             short_flights: 0,
+            empty_steps: 0,
             stats: Stats::default(),
             var: None,
         }
@@ -477,6 +532,21 @@ impl Simulator {
         target: Instant,
         obs: &mut impl Observer,
     ) -> Result<bool, SimError> {
+        self.begin_advance(target)?;
+        loop {
+            match self.resume(target, obs)? {
+                Progress::Stopped(reached) => return Ok(reached),
+                Progress::NeedStep => {
+                    self.compute_step()?;
+                    self.step_ready(obs);
+                }
+            }
+        }
+    }
+
+    /// Checks that the simulator can advance to `target` (not back in time, not past the plate
+    /// motion's horizon) and starts the advance's standstill guard.
+    pub(crate) fn begin_advance(&mut self, target: Instant) -> Result<(), SimError> {
         let t = target.to_f64();
         check("t", t, true, "must be finite")?;
         if target < self.now {
@@ -493,41 +563,55 @@ impl Simulator {
                 });
             }
         }
-        let mut empty_steps = 0u32;
+        self.empty_steps = 0;
+        Ok(())
+    }
+
+    /// Goes on with an advance to `target` (begun by [`Simulator::begin_advance`]) through the
+    /// steps already computed, until the next one has to be computed or the advance is over.
+    pub(crate) fn resume(
+        &mut self,
+        target: Instant,
+        obs: &mut impl Observer,
+    ) -> Result<Progress, SimError> {
         loop {
             if !self.live {
-                self.compute_step()?;
-                self.live = true;
-                self.stats.steps += 1;
-                obs.step(&StepView {
-                    start: self.t0,
-                    len: self.step.len,
-                    riding: self.step.riding,
-                    x: &self.step.series.x[..=self.order + 1],
-                    plate: self.plate.law(),
-                });
+                return Ok(Progress::NeedStep);
             }
             let (len, end) = (self.step.len, self.step.end);
             if len == 0.0 && end == StepEnd::Plain {
                 // Only at the end of an external plate piece.
                 self.now = target;
-                return Ok(true);
+                return Ok(Progress::Stopped(true));
             }
             let step_end = self.t0 + len;
             if step_end > target {
                 self.now = target;
-                return Ok(true);
+                return Ok(Progress::Stopped(true));
             }
-            empty_steps = if len == 0.0 { empty_steps + 1 } else { 0 };
-            if empty_steps > 8 {
+            self.empty_steps = if len == 0.0 { self.empty_steps + 1 } else { 0 };
+            if self.empty_steps > 8 {
                 return Err(SimError::NonFinite { t: self.time() });
             }
             let flow = self.finish_step(obs)?;
             self.now = self.t0;
             if flow.is_break() {
-                return Ok(false);
+                return Ok(Progress::Stopped(false));
             }
         }
+    }
+
+    /// Marks the step just computed as the current one, counts it and shows it to `obs`.
+    pub(crate) fn step_ready(&mut self, obs: &mut impl Observer) {
+        self.live = true;
+        self.stats.steps += 1;
+        obs.step(&StepView {
+            start: self.t0,
+            len: self.step.len,
+            riding: self.step.riding,
+            x: &self.step.series.x[..=self.order + 1],
+            plate: self.plate.law(),
+        });
     }
 
     /// Switches the plate motion at the current time. The new motion must continue the plate
@@ -759,7 +843,7 @@ impl Simulator {
     }
 
     /// Computes the step from `t0` into `self.step`: its series, length and end event.
-    fn compute_step(&mut self) -> Result<(), SimError> {
+    pub(crate) fn compute_step(&mut self) -> Result<(), SimError> {
         let p = self.order;
         let mut z = [0.0; BUF];
         self.plate.series(self.t0, &mut z[..p + 3]);
@@ -776,6 +860,7 @@ impl Simulator {
         let zeta = self.params.zeta();
         let step = &mut self.step;
         step.len = 0.0;
+        step.end_gap = None;
         match self.mode {
             ContactMode::Free => {
                 step.riding = false;
@@ -826,20 +911,7 @@ impl Simulator {
                 // Checked for the whole step first, alongside the root search: far from the
                 // barrier over `h`, so over any shorter step too.
                 let far = barrier_far(self.well, self.on_barrier, &s.x[..=p + 1], h);
-                step.len = h;
-                step.end = StepEnd::Plain;
-                if let Some(r) = first_root(&gap[m..], h) {
-                    step.len = r;
-                    step.end = StepEnd::Impact;
-                }
-                if !far {
-                    if let Some(r) =
-                        barrier_root(self.well, self.on_barrier, &s.x[..=p + 1], step.len)
-                    {
-                        step.len = r;
-                        step.end = StepEnd::Barrier;
-                    }
-                }
+                self.end_free_step(m, h, false, far, None);
             }
             ContactMode::Sticking => {
                 step.riding = true;
@@ -875,6 +947,120 @@ impl Simulator {
                     }
                 }
             }
+        }
+        Ok(())
+    }
+
+    /// Ends the free step of length up to `h` whose series is in `self.step`, at the first root
+    /// of the gap (from its coefficient `m`, the first that does not vanish) or of `x − ½` in
+    /// it. `clear`: the gap is known to have no root over `h`; `far`: the barrier is known to
+    /// be out of reach over `h`; `bernstein`: the gap's Bernstein coefficients over `h`, when
+    /// known (the root search then starts from them).
+    fn end_free_step(
+        &mut self,
+        m: usize,
+        h: f64,
+        clear: bool,
+        far: bool,
+        bernstein: Option<&[f64]>,
+    ) {
+        let p = self.order;
+        let step = &mut self.step;
+        let s = &step.series;
+        step.len = h;
+        step.end = StepEnd::Plain;
+        if !clear {
+            let gap = &s.u[m..=p + 1];
+            let root = match bernstein {
+                Some(b) => first_root_from(gap, h, b),
+                None => first_root(gap, h),
+            };
+            if let Some(r) = root {
+                step.len = r;
+                step.end = StepEnd::Impact;
+            }
+        }
+        if !far {
+            if let Some(r) = barrier_root(self.well, self.on_barrier, &s.x[..=p + 1], step.len) {
+                step.len = r;
+                step.end = StepEnd::Barrier;
+            }
+        }
+    }
+
+    /// The start of the next step, if it is a free flight under a sinusoidal plate that starts
+    /// away from the plate or leaves it (the gap pinned at zero, moving away), the cases a
+    /// batch computes in its lanes.
+    pub(crate) fn lane_start(&mut self) -> Option<LaneStart> {
+        let PlateMotion::Sinusoid(s) = *self.plate.law() else {
+            return None;
+        };
+        let leaving = match self.pinned {
+            0 if self.u0 > 0.0 => false,
+            1 if self.u0 == 0.0 && self.w0 > 0.0 => true,
+            _ => return None,
+        };
+        if self.mode != ContactMode::Free {
+            return None;
+        }
+        let (sin, cos) = self.plate.sin_cos(&s, self.t0);
+        Some(LaneStart {
+            u0: self.u0,
+            w0: self.w0,
+            sin,
+            cos,
+            offset: s.origin().2,
+            leaving,
+            above: self.well == Well::Two,
+            on_barrier: self.on_barrier,
+            phi: self
+                .var
+                .as_ref()
+                .map(|v| if v.reseed { IDENTITY } else { v.phi }),
+        })
+    }
+
+    /// The plate's coefficient magnitudes for a batch's kernel, keyed by the sinusoid's
+    /// `(Ω, V)` bits (`u64::MAX` for a polynomial piece).
+    pub(crate) fn plate_magnitudes(&self) -> ([u64; 2], &[f64; BUF]) {
+        let key = match self.plate.law() {
+            PlateMotion::Sinusoid(s) => [s.omega().to_bits(), s.velocity().to_bits()],
+            PlateMotion::Poly(_) => [u64::MAX; 2],
+        };
+        (key, self.plate.magnitudes())
+    }
+
+    /// Takes a free step that a batch computed from [`Simulator::lane_start`]: `fill` writes the
+    /// series of `x`, of the gap and (with variational equations) of their columns, and `out`
+    /// is the kernel's verdict. The step is the one [`Simulator::compute_step`] would compute
+    /// from the same start: a lane whose step the kernel left open (non-finite, no valid step
+    /// size) is computed here by `compute_step` itself.
+    pub(crate) fn take_lane_step(
+        &mut self,
+        leaving: bool,
+        out: LaneEnd,
+        fill: impl FnOnce(&mut FlightSeries, Option<&mut VariationSeries>),
+    ) -> Result<(), SimError> {
+        if !out.finite || out.h.is_nan() || out.h < 0.0 {
+            return self.compute_step();
+        }
+        let step = &mut self.step;
+        step.len = 0.0;
+        step.end_gap = None;
+        step.riding = false;
+        fill(&mut step.series, self.var.as_mut().map(|v| &mut v.cols));
+        if let Some(v) = self.var.as_mut() {
+            if v.reseed {
+                v.phi = IDENTITY;
+                v.reseed = false;
+            }
+        }
+        // The kernel's Bernstein coefficients are those of the whole gap, so not of the
+        // gap divided by `s` when the step leaves the plate.
+        let bernstein = (!leaving).then_some(&out.bernstein[..=self.order + 1]);
+        self.end_free_step(usize::from(leaving), out.h, out.clear, out.far, bernstein);
+        if out.clear && out.far {
+            self.step.end_gap = Some(out.end_gap);
         }
         Ok(())
     }
@@ -917,7 +1103,8 @@ impl Simulator {
             if let Some(v) = self.var.as_mut() {
                 v.phi = v.cols.phi_at(p + 1, step.len);
             }
-            eval_d(&step.series.u[..=p + 1], step.len)
+            step.end_gap
+                .unwrap_or_else(|| eval_d(&step.series.u[..=p + 1], step.len))
         };
         let end = step.end;
         if !(u1.is_finite() && w1.is_finite()) {

@@ -4,6 +4,8 @@
 //! follow from Cauchy products (Jorba & Zou 2005). The gap `u = x − z` is carried alongside, so the
 //! impact condition `u = 0` is a polynomial root on every step.
 
+use crate::lanes::Lane;
+
 /// Largest Taylor order supported.
 pub const MAX_ORDER: usize = 40;
 /// Length of the coefficient buffers (orders `0..=MAX_ORDER + 2`).
@@ -17,25 +19,27 @@ pub fn order_for(tol: f64) -> usize {
     (p + p % 2).clamp(8, MAX_ORDER)
 }
 
-/// Coefficients of `x` and of the gap `u = x − z` over one free-flight step, up to `order + 1`.
+/// Coefficients of `x` and of the gap `u = x − z` over one free-flight step, up to `order + 1`,
+/// for one trajectory (`T = f64`) or one per lane of a batch ([`Lane`]).
 /// `x` is zero-padded past the last coefficient (the products read whole chunks of four).
 #[derive(Clone, Copy)]
-pub(crate) struct FlightSeries {
-    pub x: [f64; PAD],
-    pub u: [f64; BUF],
+pub(crate) struct FlightSeries<T = f64> {
+    pub x: [T; PAD],
+    pub u: [T; BUF],
     /// Coefficients of `x²` (orders `0..order`), for the variational equations.
-    pub sq: [f64; PAD],
+    pub sq: [T; PAD],
     /// Scratch: `x` in reverse order, `xr[R − j] = x_j`, zero past `R`.
-    xr: [f64; PAD],
+    xr: [T; PAD],
 }
 
-impl Default for FlightSeries {
+impl<T: Lane> Default for FlightSeries<T> {
     fn default() -> Self {
+        let zero = T::splat(0.0);
         Self {
-            x: [0.0; PAD],
-            u: [0.0; BUF],
-            sq: [0.0; PAD],
-            xr: [0.0; PAD],
+            x: [zero; PAD],
+            u: [zero; BUF],
+            sq: [zero; PAD],
+            xr: [zero; PAD],
         }
     }
 }
@@ -56,49 +60,51 @@ pub(crate) fn flight(
     var: Option<&mut VariationSeries>,
 ) {
     match var {
-        Some(v) => flight_pass::<true>(zeta, u0, w0, z, order, out, Some(v)),
-        None => flight_pass::<false>(zeta, u0, w0, z, order, out, None),
+        Some(v) => flight_pass::<f64, true>(zeta, u0, w0, z, order, out, Some(v)),
+        None => flight_pass::<f64, false>(zeta, u0, w0, z, order, out, None),
     }
 }
 
-/// [`flight`], compiled once with the variational equations (`VAR`, `var` given) and once
-/// without.
+/// [`flight`] over any lane type: compiled once with the variational equations (`VAR`, `var`
+/// given) and once without, for `f64` and for each batch width. Lane `i` of a batch computes
+/// exactly what `f64` computes from lane `i`'s inputs (the same operations in the same order).
 #[inline(always)]
-fn flight_pass<const VAR: bool>(
+pub(crate) fn flight_pass<T: Lane, const VAR: bool>(
     zeta: f64,
-    u0: f64,
-    w0: f64,
-    z: &[f64; BUF],
+    u0: T,
+    w0: T,
+    z: &[T; BUF],
     order: usize,
-    out: &mut FlightSeries,
-    mut var: Option<&mut VariationSeries>,
+    out: &mut FlightSeries<T>,
+    mut var: Option<&mut VariationSeries<T>>,
 ) {
+    let zero = T::splat(0.0);
     let FlightSeries { x: xp, u, sq, xr } = out;
     // U''(x) = 1 − 6x + 6x² as a series, built order by order for the variational equation.
-    let mut a = [0.0; BUF];
+    let mut a = [zero; BUF];
     // With x reversed in xr (zero past x_0), each Cauchy product is a dot product over a length
     // rounded up to a multiple of 4; the entries read past the last computed coefficient of xp
     // and sq must be zero. Only entries written here are read from xr below R.
-    sq[..order + 4].iter_mut().for_each(|c| *c = 0.0);
+    sq[..order + 4].iter_mut().for_each(|c| *c = zero);
     xp[0] = u0 + z[0];
     xp[1] = w0 + z[1];
     u[0] = u0;
     u[1] = w0;
     xr[R] = xp[0];
     xr[R - 1] = xp[1];
-    xp[order + 2..order + 5].iter_mut().for_each(|c| *c = 0.0);
-    let three_minus_2x0 = 3.0 - 2.0 * xp[0];
+    xp[order + 2..order + 5].iter_mut().for_each(|c| *c = zero);
+    let three_minus_2x0 = T::splat(3.0) - T::splat(2.0) * xp[0];
     // The newest values, x_k, x_{k+1} and sq[k − 1], are taken from registers: a load of a value
     // stored just before (above all a vector load across it) would wait for the store.
     let (mut x_k, mut x_k1) = (xp[0], xp[1]);
-    let mut sq_prev = 0.0;
+    let mut sq_prev = zero;
     for k in 0..order {
         let len = (k + 4) & !3;
         let rev = &xr[R - k..R - k + len];
         // Off the critical path: the linear terms and the cube's products with older squares
         // (sq[k] is still zero here, so its term s·x_0 is folded in below and the vector loads
         // never wait for a value stored just before).
-        let lin = -2.0 * zeta * (k + 1) as f64 * x_k1 - x_k;
+        let lin = T::splat(-2.0 * zeta * (k + 1) as f64) * x_k1 - x_k;
         let c_old = if k == 0 {
             dot4(&sq[..len], rev)
         } else {
@@ -106,7 +112,7 @@ fn flight_pass<const VAR: bool>(
         };
         // Square by symmetry: twice the pairs j < k − j, plus the middle term.
         let half = k.div_ceil(2);
-        let mut s = 2.0 * dot_exact(&xp[..half], &rev[..half]);
+        let mut s = T::splat(2.0) * dot_exact(&xp[..half], &rev[..half]);
         if k % 2 == 0 {
             s += xp[k / 2] * xp[k / 2];
         }
@@ -115,26 +121,24 @@ fn flight_pass<const VAR: bool>(
         if let (true, Some(var)) = (VAR, var.as_deref_mut()) {
             // Order k of both columns: Σ_{i≤k} a_i d_{k−i} summed from i = 0, lanes apart.
             a[k] = if k == 0 {
-                6.0 * (s - x_k) + 1.0
+                T::splat(6.0) * (s - x_k) + T::splat(1.0)
             } else {
-                6.0 * (s - x_k)
+                T::splat(6.0) * (s - x_k)
             };
             let d = &mut var.d;
-            let mut c = [-0.0_f64; 2];
-            for (ai, dj) in a[..=k].iter().zip(d[..=k].iter().rev()) {
+            let mut c = [T::splat(-0.0); 2];
+            for (&ai, dj) in a[..=k].iter().zip(d[..=k].iter().rev()) {
                 c[0] += ai * dj[0];
                 c[1] += ai * dj[1];
             }
-            let damp = -2.0 * zeta * (k + 1) as f64;
+            let damp = T::splat(-2.0 * zeta * (k + 1) as f64);
+            let inv = T::splat(INV_PAIR[k]);
             let prev = d[k + 1];
-            d[k + 2] = [
-                (damp * prev[0] - c[0]) * INV_PAIR[k],
-                (damp * prev[1] - c[1]) * INV_PAIR[k],
-            ];
+            d[k + 2] = [(damp * prev[0] - c[0]) * inv, (damp * prev[1] - c[1]) * inv];
         }
         // rhs = lin + 3s − 2(c_old + s·x_0)
-        let rhs = (lin - 2.0 * c_old) + s * three_minus_2x0;
-        let xk2 = rhs * INV_PAIR[k];
+        let rhs = (lin - T::splat(2.0) * c_old) + s * three_minus_2x0;
+        let xk2 = rhs * T::splat(INV_PAIR[k]);
         xp[k + 2] = xk2;
         xr[R - k - 2] = xk2;
         u[k + 2] = xk2 - z[k + 2];
@@ -159,30 +163,34 @@ pub(crate) const PAD: usize = BUF + 8;
 /// Index of `x_0` in the reversed buffer.
 const R: usize = BUF + 2;
 
-/// `Σ a_j b_j` over equal-length slices: chunks of four with four accumulators, then the rest.
+/// `Σ a_j b_j` over equal-length slices: chunks of four with four accumulators, then the rest
+/// (summed from `−0`, as `Iterator::sum` does).
 #[inline(always)]
-fn dot_exact(a: &[f64], b: &[f64]) -> f64 {
+fn dot_exact<T: Lane>(a: &[T], b: &[T]) -> T {
     let (ac, ar) = a.as_chunks::<4>();
     let (bc, br) = b.as_chunks::<4>();
-    let mut acc = [0.0; 4];
+    let mut acc = [T::splat(0.0); 4];
     add_chunks(&mut acc, ac, bc);
-    let tail: f64 = ar.iter().zip(br).map(|(x, y)| x * y).sum();
+    let tail = ar
+        .iter()
+        .zip(br)
+        .fold(T::splat(-0.0), |t, (&x, &y)| t + x * y);
     (acc[0] + acc[1]) + (acc[2] + acc[3]) + tail
 }
 
 /// `Σ a_j b_j` over slices whose length is a multiple of 4, with four accumulators.
 #[inline(always)]
-fn dot4(a: &[f64], b: &[f64]) -> f64 {
+fn dot4<T: Lane>(a: &[T], b: &[T]) -> T {
     let (a, _) = a.as_chunks::<4>();
     let (b, _) = b.as_chunks::<4>();
-    let mut acc = [0.0; 4];
+    let mut acc = [T::splat(0.0); 4];
     add_chunks(&mut acc, a, b);
     (acc[0] + acc[1]) + (acc[2] + acc[3])
 }
 
 /// Adds the products of the chunks of `a` and `b`, lane by lane, to `acc`.
 #[inline(always)]
-fn add_chunks(acc: &mut [f64; 4], a: &[[f64; 4]], b: &[[f64; 4]]) {
+fn add_chunks<T: Lane>(acc: &mut [T; 4], a: &[[T; 4]], b: &[[T; 4]]) {
     for (x, y) in a.iter().zip(b) {
         for i in 0..4 {
             acc[i] += x[i] * y[i];
@@ -193,11 +201,12 @@ fn add_chunks(acc: &mut [f64; 4], a: &[[f64; 4]], b: &[[f64; 4]]) {
 /// [`dot4`] for `a` whose entry `at` is `newest` (passed in a register) and zero past it: the
 /// chunk holding it is assembled lane by lane, the same products in the same order.
 #[inline(always)]
-fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
+fn dot4_newest<T: Lane>(a: &[T], b: &[T], at: usize, newest: T) -> T {
+    let zero = T::splat(0.0);
     let q = at / 4;
     let (a, _) = a.as_chunks::<4>();
     let (b, _) = b.as_chunks::<4>();
-    let mut acc = [0.0; 4];
+    let mut acc = [zero; 4];
     add_chunks(&mut acc, &a[..q], &b[..q]);
     let m = &a[q];
     let y = &b[q];
@@ -209,13 +218,13 @@ fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
         } else if i == lane {
             newest
         } else {
-            0.0
+            zero
         };
         acc[i] += x * y[i];
     }
     for y in &b[q + 1..] {
         for i in 0..4 {
-            acc[i] += 0.0 * y[i];
+            acc[i] += zero * y[i];
         }
     }
     (acc[0] + acc[1]) + (acc[2] + acc[3])
@@ -224,13 +233,15 @@ fn dot4_newest(a: &[f64], b: &[f64], at: usize, newest: f64) -> f64 {
 /// Coefficients of the two columns of the variational solution over a free-flight step
 /// ([`flight`]), order by order, both columns of an order side by side.
 #[derive(Clone)]
-pub(crate) struct VariationSeries {
-    d: [[f64; 2]; BUF],
+pub(crate) struct VariationSeries<T = f64> {
+    pub(crate) d: [[T; 2]; BUF],
 }
 
-impl Default for VariationSeries {
+impl<T: Lane> Default for VariationSeries<T> {
     fn default() -> Self {
-        Self { d: [[0.0; 2]; BUF] }
+        Self {
+            d: [[T::splat(0.0); 2]; BUF],
+        }
     }
 }
 
