@@ -19,6 +19,7 @@ use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER_ENERGY};
 use crate::shaker::Sinusoid;
 use crate::simulator::{SimError, Simulator};
+use crate::time::Instant;
 
 /// Response class (model.md Sec. 4).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -193,144 +194,271 @@ pub fn classify_from(
     start: (f64, f64),
     track: Tracking,
 ) -> Result<Classification, SimError> {
-    let efoldings_cap = track.efoldings_cap;
-    let period_len = plate.period();
-    let max_sections = (co.max_natural_periods * std::f64::consts::TAU / period_len)
-        .ceil()
-        .max(1.0) as u64;
-    let mut sim = Simulator::with_state(params, plate.into(), opts, 0.0, start.0, start.1)?;
-    let mut growth = efoldings_cap.map(Growth::new);
-    let mut votes = Votes::new(
-        track.extra_windows,
-        co.lyapunov_periods,
-        max_sections,
-        !track.no_lyapunov,
-    );
-    if growth.is_some() {
-        sim.start_variational();
+    let (mut run, mut sim) = ClassifyRun::start(params, plate, opts, co, start, track)?;
+    loop {
+        let target = run.target();
+        sim.advance_instant(target, &mut |e: &Event| run.event(e))?;
+        if let Some(c) = run.reached(&mut sim)? {
+            return Ok(c);
+        }
     }
-    let keep = (4 * co.max_period + 8) as usize;
-    let mut hist: VecDeque<Section> = VecDeque::with_capacity(keep + 1);
-    let mut sticks = 0u64;
-    let mut decided: Option<(u32, bool)> = None; // (period, at rest)
-    let mut k = 0u64;
-    while k < max_sections {
-        k += 1;
-        sim.advance_instant(plate.section(k), &mut |e: &Event| {
-            sticks += u64::from(matches!(e, Event::StickStart { .. }))
-        })?;
+}
+
+/// A classification run ([`classify_from`]) taken one stretch at a time, so that a caller can
+/// drive its simulator itself (as one lane of a [`crate::Batch`]): advance the simulator to
+/// [`ClassifyRun::target`], passing every event to [`ClassifyRun::event`], then call
+/// [`ClassifyRun::reached`], until it returns the classification. Driven this way the run does
+/// exactly what [`classify_from`] does.
+pub struct ClassifyRun {
+    plate: Sinusoid,
+    co: ClassifyOptions,
+    track: Tracking,
+    period_len: f64,
+    max_sections: u64,
+    growth: Option<Growth>,
+    votes: Votes,
+    keep: usize,
+    hist: VecDeque<Section>,
+    sticks: u64,
+    /// Sections reached so far.
+    k: u64,
+    stage: Stage,
+}
+
+/// Where a [`ClassifyRun`] is.
+enum Stage {
+    /// At the stroboscopic sections, until the class is decided or the run ends.
+    Sections,
+    /// Decided; measuring the Lyapunov exponent of an aperiodic run (`Some`), or over.
+    After(Box<Decided>, Option<LyapunovRun>),
+}
+
+/// What the section stage found.
+struct Decided {
+    class: ResponseClass,
+    period: Option<u32>,
+    at_rest: bool,
+    snap_throughs: u64,
+    impacts_per_period: Option<u64>,
+    sticking: bool,
+    cycle_anchor: Option<[f64; 2]>,
+    transient_efoldings: Option<f64>,
+}
+
+impl ClassifyRun {
+    /// The run and its simulator, at the start (`start` as in [`classify_from`]).
+    pub fn start(
+        params: Params,
+        plate: Sinusoid,
+        opts: SolverOptions,
+        co: ClassifyOptions,
+        start: (f64, f64),
+        track: Tracking,
+    ) -> Result<(Self, Simulator), SimError> {
+        let period_len = plate.period();
+        let max_sections = (co.max_natural_periods * std::f64::consts::TAU / period_len)
+            .ceil()
+            .max(1.0) as u64;
+        let mut sim = Simulator::with_state(params, plate.into(), opts, 0.0, start.0, start.1)?;
+        let growth = track.efoldings_cap.map(Growth::new);
+        let votes = Votes::new(
+            track.extra_windows,
+            co.lyapunov_periods,
+            max_sections,
+            !track.no_lyapunov,
+        );
+        if growth.is_some() {
+            sim.start_variational();
+        }
+        let keep = (4 * co.max_period + 8) as usize;
+        let run = Self {
+            plate,
+            co,
+            track,
+            period_len,
+            max_sections,
+            growth,
+            votes,
+            keep,
+            hist: VecDeque::with_capacity(keep + 1),
+            sticks: 0,
+            k: 1,
+            stage: Stage::Sections,
+        };
+        Ok((run, sim))
+    }
+
+    /// The instant to advance the simulator to next.
+    pub fn target(&self) -> Instant {
+        match &self.stage {
+            Stage::Sections => self.plate.section(self.k),
+            Stage::After(_, Some(l)) => l.target(),
+            Stage::After(_, None) => self.plate.section(self.k),
+        }
+    }
+
+    /// Takes an event of the simulator's advance.
+    pub fn event(&mut self, e: &Event) {
+        self.sticks += u64::from(matches!(e, Event::StickStart { .. }));
+    }
+
+    /// Takes the simulator at [`ClassifyRun::target`]: the classification when the run is
+    /// over, `None` when it goes on to the next target.
+    pub fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Classification>, SimError> {
+        if let Stage::After(_, l) = &mut self.stage {
+            let lyapunov = match l {
+                Some(l) => match l.reached(sim) {
+                    None => return Ok(None),
+                    Some(lyapunov) => lyapunov,
+                },
+                None => None,
+            };
+            return Ok(Some(self.result(sim, lyapunov)));
+        }
+        let co = self.co;
+        let k = self.k;
         // Only the mass is recorded: `mass` skips the plate's sine and cosine.
         let (x, v, mode, well) = sim.mass();
         let stats = sim.stats();
-        hist.push_back(Section {
+        self.hist.push_back(Section {
             y: [x, v],
             impacts: stats.impacts,
             snaps: stats.snap_throughs,
-            sticks,
+            sticks: self.sticks,
         });
-        if hist.len() > keep {
-            hist.pop_front();
+        if self.hist.len() > self.keep {
+            self.hist.pop_front();
         }
-        if growth.as_ref().is_some_and(|g| g.live) || votes.measuring(k) {
+        if self.growth.as_ref().is_some_and(|g| g.live) || self.votes.measuring(k) {
             let l = sim.renormalize_variational();
             if l.is_none() {
                 // Stuck (Φ = 0): a new stretch starts with the next free flight.
                 sim.reseed_variational();
             }
-            if let Some(g) = growth.as_mut() {
+            if let Some(g) = self.growth.as_mut() {
                 g.section(l);
-                if track.track_periods > 0 && k >= track.track_periods {
+                if self.track.track_periods > 0 && k >= self.track.track_periods {
                     g.live = false;
                 }
             }
-            votes.section(k, l);
+            self.votes.section(k, l);
         }
-        if votes.from == Some(k + 1) {
+        if self.votes.from == Some(k + 1) {
             // The next section warms up the windows' measurement: from its first step on,
             // without restarting the integration (the ongoing step carries no variation).
             sim.track_variational();
-        } else if !growth.as_ref().is_some_and(|g| g.live) && !votes.measuring(k + 1) {
+        } else if !self.growth.as_ref().is_some_and(|g| g.live) && !self.votes.measuring(k + 1) {
             sim.disable_variational();
         }
-        let rest = at_rest_in_well_two(x, v, mode, well, plate);
+        let rest = at_rest_in_well_two(x, v, mode, well, self.plate);
         let found = if rest {
             Some((1, true))
         } else {
-            find_period(&hist, co).map(|p| (p, false))
+            find_period(&self.hist, co).map(|p| (p, false))
         };
-        if found.is_some() && !co.full_length {
-            decided = found;
-            break;
+        if (found.is_some() && !co.full_length) || k >= self.max_sections {
+            return Ok(self.decide(sim, found));
         }
-        if co.full_length {
-            decided = found;
+        self.k += 1;
+        Ok(None)
+    }
+
+    /// Ends the section stage with `decided` (`(period, at rest)`): the classification, or
+    /// `None` when the Lyapunov stage follows.
+    fn decide(
+        &mut self,
+        sim: &mut Simulator,
+        decided: Option<(u32, bool)>,
+    ) -> Option<Classification> {
+        let hist = &self.hist;
+        let stats = sim.stats();
+        let (period, at_rest) = match decided {
+            Some((p, r)) => (Some(p), r),
+            None => (None, false),
+        };
+        // Steady-state window: the confirmation window of the period, or the last sections kept.
+        let window = period.map_or(hist.len(), |p| confirm_len(p) as usize + p as usize);
+        let window = window.min(hist.len());
+        let first = hist[hist.len() - window];
+        let last = hist[hist.len() - 1];
+        let steady_snaps = last.snaps - first.snaps;
+        let class = if steady_snaps > 0 && !at_rest {
+            ResponseClass::ContinuousInterwell
+        } else if stats.snap_throughs > 0 {
+            ResponseClass::TransientInterwell
+        } else {
+            ResponseClass::Intrawell
+        };
+        let per_window = |f: fn(&Section) -> u64| {
+            period.map(|p| {
+                let back = hist[hist.len() - 1 - p as usize];
+                f(&last) - f(&back)
+            })
+        };
+        let impacts_per_period = if at_rest {
+            Some(0)
+        } else {
+            per_window(|s| s.impacts)
+        };
+        let sticking = !at_rest && per_window(|s| s.sticks).is_some_and(|n| n > 0);
+        let cycle_anchor = period.map(|p| {
+            hist.iter()
+                .rev()
+                .take(p as usize)
+                .map(|s| s.y)
+                .fold([f64::INFINITY, 0.0], |a, y| if y[0] < a[0] { y } else { a })
+        });
+        let transient_efoldings = self.growth.as_ref().map(|g| g.max.min(g.cap));
+        sim.disable_variational();
+        let decided = Box::new(Decided {
+            class,
+            period,
+            at_rest,
+            snap_throughs: stats.snap_throughs,
+            impacts_per_period,
+            sticking,
+            cycle_anchor,
+            transient_efoldings,
+        });
+        let measure = period.is_none() && !self.track.no_lyapunov;
+        let run =
+            measure.then(|| LyapunovRun::start(sim, self.period_len, self.co.lyapunov_periods));
+        let instant = match &run {
+            None => Some(None),
+            Some(l) if l.periods == 0 => Some(l.value(sim)),
+            Some(_) => None,
+        };
+        self.stage = Stage::After(decided, run);
+        instant.map(|lyapunov| self.result(sim, lyapunov))
+    }
+
+    /// The classification, with the Lyapunov exponent measured after the sections (if any).
+    fn result(&self, sim: &Simulator, lyapunov: Option<f64>) -> Classification {
+        let Stage::After(d, _) = &self.stage else {
+            unreachable!("the result follows the section stage");
+        };
+        let chaos_votes = if d.period.is_none() {
+            self.votes.result(self.period_len)
+        } else {
+            None
+        };
+        Classification {
+            class: d.class,
+            period: d.period,
+            chaotic: d.period.is_none() && lyapunov.is_some_and(|l| l > CHAOS),
+            lyapunov,
+            snap_throughs: d.snap_throughs,
+            final_well: sim.state().well,
+            at_rest_in_second_well: d.at_rest,
+            impacts_per_period: d.impacts_per_period,
+            sticking: d.sticking,
+            periods_simulated: self.k as f64 * self.period_len / std::f64::consts::TAU,
+            stopped_early: self.k < self.max_sections,
+            transient_efoldings: d.transient_efoldings,
+            chaos_votes,
+            cycle_anchor: d.cycle_anchor,
         }
     }
-    let stats = sim.stats();
-    let (period, at_rest) = match decided {
-        Some((p, r)) => (Some(p), r),
-        None => (None, false),
-    };
-    // Steady-state window: the confirmation window of the period, or the last sections kept.
-    let window = period.map_or(hist.len(), |p| confirm_len(p) as usize + p as usize);
-    let window = window.min(hist.len());
-    let first = hist[hist.len() - window];
-    let last = hist[hist.len() - 1];
-    let steady_snaps = last.snaps - first.snaps;
-    let class = if steady_snaps > 0 && !at_rest {
-        ResponseClass::ContinuousInterwell
-    } else if stats.snap_throughs > 0 {
-        ResponseClass::TransientInterwell
-    } else {
-        ResponseClass::Intrawell
-    };
-    let per_window = |f: fn(&Section) -> u64| {
-        period.map(|p| {
-            let back = hist[hist.len() - 1 - p as usize];
-            f(&last) - f(&back)
-        })
-    };
-    let impacts_per_period = if at_rest {
-        Some(0)
-    } else {
-        per_window(|s| s.impacts)
-    };
-    let sticking = !at_rest && per_window(|s| s.sticks).is_some_and(|n| n > 0);
-    let cycle_anchor = period.map(|p| {
-        hist.iter()
-            .rev()
-            .take(p as usize)
-            .map(|s| s.y)
-            .fold([f64::INFINITY, 0.0], |a, y| if y[0] < a[0] { y } else { a })
-    });
-    let transient_efoldings = growth.as_ref().map(|g| g.max.min(g.cap));
-    sim.disable_variational();
-    let lyapunov = match period {
-        Some(_) => None,
-        None if track.no_lyapunov => None,
-        None => lyapunov_exponent(&mut sim, period_len, co.lyapunov_periods)?,
-    };
-    let chaos_votes = if period.is_none() {
-        votes.result(period_len)
-    } else {
-        None
-    };
-    Ok(Classification {
-        class,
-        period,
-        chaotic: period.is_none() && lyapunov.is_some_and(|l| l > CHAOS),
-        lyapunov,
-        snap_throughs: stats.snap_throughs,
-        final_well: sim.state().well,
-        at_rest_in_second_well: at_rest,
-        impacts_per_period,
-        sticking,
-        periods_simulated: k as f64 * period_len / std::f64::consts::TAU,
-        stopped_early: k < max_sections,
-        transient_efoldings,
-        chaos_votes,
-        cycle_anchor,
-    })
 }
 
 /// Largest Lyapunov exponent (per unit of `τ`) above which an aperiodic response is chaotic.
@@ -538,15 +666,60 @@ fn lyapunov_exponent(
     period_len: f64,
     periods: u32,
 ) -> Result<Option<f64>, SimError> {
-    sim.enable_variational();
-    let t0 = sim.time();
-    let mut sum = 0.0;
-    for k in 1..=periods {
-        sim.advance_to(t0 + f64::from(k) * period_len, &mut |_: &Event| {})?;
-        match sim.renormalize_variational() {
-            Some(l) => sum += l,
-            None => return Ok(None),
+    let mut run = LyapunovRun::start(sim, period_len, periods);
+    if periods == 0 {
+        return Ok(run.value(sim));
+    }
+    loop {
+        sim.advance_instant(run.target(), &mut |_: &Event| {})?;
+        if let Some(l) = run.reached(sim) {
+            return Ok(l);
         }
     }
-    Ok(Some(sum / (sim.time() - t0)))
+}
+
+/// The measurement of [`lyapunov_exponent`], one shaker period at a time.
+struct LyapunovRun {
+    t0: f64,
+    period_len: f64,
+    periods: u32,
+    /// Periods reached so far.
+    k: u32,
+    sum: f64,
+}
+
+impl LyapunovRun {
+    /// Starts the variational equations on `sim` now.
+    fn start(sim: &mut Simulator, period_len: f64, periods: u32) -> Self {
+        sim.enable_variational();
+        Self {
+            t0: sim.time(),
+            period_len,
+            periods,
+            k: 1,
+            sum: 0.0,
+        }
+    }
+
+    fn target(&self) -> Instant {
+        Instant::new(self.t0 + f64::from(self.k) * self.period_len)
+    }
+
+    /// Takes `sim` at the target: the exponent when the measurement is over.
+    fn reached(&mut self, sim: &mut Simulator) -> Option<Option<f64>> {
+        match sim.renormalize_variational() {
+            Some(l) => self.sum += l,
+            None => return Some(None),
+        }
+        if self.k >= self.periods {
+            return Some(self.value(sim));
+        }
+        self.k += 1;
+        None
+    }
+
+    /// The exponent measured so far, at `sim`'s time.
+    fn value(&self, sim: &Simulator) -> Option<f64> {
+        Some(self.sum / (sim.time() - self.t0))
+    }
 }

@@ -38,8 +38,8 @@ pub use audit::GapAudit;
 pub use batch::{Batch, JoinError, LaneObserver};
 pub use checkpoint::{Checkpoint, PlateRecord};
 pub use classify::{
-    classify, classify_from, largest_lyapunov, Classification, ClassifyOptions, ResponseClass,
-    Tracking,
+    classify, classify_from, largest_lyapunov, Classification, ClassifyOptions, ClassifyRun,
+    ResponseClass, Tracking,
 };
 pub use events::{ContactMode, Event, Impact, StickCause, Well};
 pub use lanes::Width;
