@@ -19,11 +19,12 @@
 //! (`α = 1`: smooth boundaries; `α < 1`: fractal).
 
 use bistable_core::{
-    classify_from, Classification, ClassifyOptions, ParamError, ResponseClass, SimError, Sinusoid,
-    Tracking, Well,
+    Classification, ClassifyOptions, ParamError, ResponseClass, SimError, Sinusoid, Tracking, Well,
+    Width,
 };
 
-use crate::parallel::{self, Threads};
+use crate::ensemble::{self, run_alone, Run, Task};
+use crate::parallel::Threads;
 use crate::sensitivity::Outcome;
 use crate::Model;
 
@@ -125,19 +126,62 @@ pub fn basin_cell(
     v0: f64,
     co: ClassifyOptions,
 ) -> Result<Cell, SimError> {
-    let shaker = shaker_at(model, phase)?;
-    let c: Classification = classify_from(
-        model.params,
-        shaker,
-        model.opts,
-        co,
-        (x0, v0),
-        Tracking::default(),
-    )?;
-    Ok(Cell {
+    run_alone(CellTask::new(model, phase, x0, v0, co)?)
+}
+
+/// A basin cell as a [`Task`]: one classification run from its start.
+struct CellTask {
+    run: Run,
+    result: Option<Classification>,
+}
+
+impl CellTask {
+    fn new(
+        model: &Model,
+        phase: f64,
+        x0: f64,
+        v0: f64,
+        co: ClassifyOptions,
+    ) -> Result<Self, SimError> {
+        Ok(Self {
+            run: Run {
+                params: model.params,
+                plate: shaker_at(model, phase)?,
+                opts: model.opts,
+                co,
+                start: (x0, v0),
+                track: Tracking::default(),
+            },
+            result: None,
+        })
+    }
+}
+
+impl Task for CellTask {
+    type Output = Cell;
+
+    fn start(&mut self) -> Result<Vec<Run>, SimError> {
+        Ok(vec![self.run])
+    }
+
+    fn run_done(&mut self, _: usize, result: Classification) -> Result<Vec<Run>, SimError> {
+        self.result = Some(result);
+        Ok(Vec::new())
+    }
+
+    fn finish(self) -> Cell {
+        let c = self.result.expect("the cell's run is done");
+        let (x0, v0) = self.run.start;
+        cell_of(x0, v0, &c)
+    }
+}
+
+/// The cell of the start `(x0, x0')` whose run gave `c`.
+fn cell_of(x0: f64, v0: f64, c: &Classification) -> Cell {
+    Cell {
         x0,
         v0,
-        outcome: Outcome::of(&c),
+        outcome: Outcome::of(c),
         anchor: if c.at_rest_in_second_well {
             None
         } else {
@@ -145,7 +189,7 @@ pub fn basin_cell(
         },
         at_rest: c.at_rest_in_second_well,
         periods_simulated: c.periods_simulated,
-    })
+    }
 }
 
 /// Relative tolerance within which two cycle anchors are the same orbit.
@@ -301,8 +345,8 @@ pub fn count_uncertain(
 }
 
 /// The uncertainty fraction at each `epsilon` over the sampled cells (each with its attractor
-/// index), classifying the neighbour starts ([`uncertainty_starts`]) on `threads` threads,
-/// `progress(done, total)` after each (returning an error cancels).
+/// index), classifying the neighbour starts ([`uncertainty_starts`]) on `threads` threads of
+/// `width` lanes, `progress(done, total)` after each (returning an error cancels).
 #[allow(clippy::too_many_arguments)]
 pub fn uncertainty<E>(
     model: &Model,
@@ -313,17 +357,25 @@ pub fn uncertainty<E>(
     epsilons: &[f64],
     plate_x: f64,
     threads: Threads,
+    width: Width,
     mut progress: impl FnMut(usize, usize) -> Result<(), E>,
 ) -> Result<Result<Vec<Uncertain>, SimError>, E> {
     let starts = uncertainty_starts(samples, epsilons, plate_x);
     let total = starts.len();
-    let results = parallel::map(
+    let mut results: Vec<Option<Result<Cell, SimError>>> = vec![None; total];
+    let mut finished = 0;
+    ensemble::run(
         &starts,
         threads,
-        |&(_, i, x0)| basin_cell(model, phase, x0, samples[i].0.v0, co),
-        |n| progress(n, total),
+        width,
+        |&(_, i, x0)| CellTask::new(model, phase, x0, samples[i].0.v0, co),
+        |k, r| {
+            results[k] = Some(r);
+            finished += 1;
+            progress(finished, total)
+        },
     )?;
-    let reached: Result<Vec<Cell>, SimError> = results.into_iter().collect();
+    let reached: Result<Vec<Cell>, SimError> = results.into_iter().flatten().collect();
     Ok(reached.map(|r| count_uncertain(attractors, samples, epsilons, &starts, &r)))
 }
 
@@ -348,21 +400,23 @@ pub fn uncertainty_exponent(points: &[Uncertain]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-/// Classifies every start of `starts` on `threads` threads; each result goes with its index to
-/// `done` on the calling thread as it completes (returning an error cancels, as in
-/// [`parallel::run`]).
+/// Classifies every start of `starts` on `threads` threads of `width` lanes
+/// ([`ensemble::run`]; the cells are the same for every width); each result goes with its
+/// index to `done` on the calling thread as it completes (returning an error cancels).
 pub fn classify_starts<E>(
     model: &Model,
     phase: f64,
     co: ClassifyOptions,
     starts: &[(f64, f64)],
     threads: Threads,
+    width: Width,
     done: impl FnMut(usize, Result<Cell, SimError>) -> Result<(), E>,
 ) -> Result<(), E> {
-    parallel::run(
+    ensemble::run(
         starts,
         threads,
-        |&(x0, v0)| basin_cell(model, phase, x0, v0, co),
+        width,
+        |&(x0, v0)| CellTask::new(model, phase, x0, v0, co),
         done,
     )
 }

@@ -22,10 +22,11 @@
 //! determinate outcome (`chaotic`), not a sensitive one.
 
 use bistable_core::{
-    classify_from, Classification, ClassifyOptions, ParamError, ResponseClass, SimError,
-    SolverOptions, Tracking, Well,
+    Classification, ClassifyOptions, ParamError, ResponseClass, SimError, SolverOptions, Tracking,
+    Well,
 };
 
+use crate::ensemble::{run_alone, Run, Task};
 use crate::Model;
 
 /// Settings of the sensitivity test.
@@ -263,42 +264,114 @@ pub fn classify_sensitive(
     co: ClassifyOptions,
     so: SensitivityOptions,
 ) -> Result<(Classification, Sensitivity), SimError> {
-    // The growth is tracked over the first `horizon` natural periods; a run decided later than
-    // that is suspect by its length alone.
-    let horizon_sections =
-        (so.horizon * std::f64::consts::TAU / model.shaker_period()).ceil() as u64;
-    let run = |co: ClassifyOptions,
-               opts: SolverOptions,
-               start: (f64, f64),
-               cap: Option<f64>,
-               no_lyapunov: bool| {
-        let track = Tracking {
-            efoldings_cap: cap,
-            track_periods: horizon_sections,
-            extra_windows: if cap.is_some() { so.windows } else { 0 },
-            no_lyapunov,
+    run_alone(PointTest::new(model, co, so))
+}
+
+/// The sensitivity test at one point as a [`Task`]: the run from the paper's
+/// initial condition, then (when it is suspect) its repeats, then the verdict
+/// ([`classify_sensitive`] makes the runs one after the other; a sweep makes them in lanes).
+pub struct PointTest {
+    model: Model,
+    co: ClassifyOptions,
+    so: SensitivityOptions,
+    /// The base run, once done.
+    base: Option<Classification>,
+    trigger: Trigger,
+    /// The repeats, by number (`1..=repeats` at `j − 1`).
+    repeats: Vec<Option<Classification>>,
+}
+
+impl PointTest {
+    /// The test at `model`'s point.
+    pub fn new(model: &Model, co: ClassifyOptions, so: SensitivityOptions) -> Self {
+        Self {
+            model: *model,
+            co,
+            so,
+            base: None,
+            trigger: Trigger::None,
+            repeats: Vec::new(),
+        }
+    }
+
+    /// A run of the point with these settings.
+    fn run(
+        &self,
+        co: ClassifyOptions,
+        opts: SolverOptions,
+        start: (f64, f64),
+        cap: Option<f64>,
+        no_lyapunov: bool,
+    ) -> Run {
+        // The growth is tracked over the first `horizon` natural periods; a run decided later
+        // than that is suspect by its length alone.
+        let horizon_sections =
+            (self.so.horizon * std::f64::consts::TAU / self.model.shaker_period()).ceil() as u64;
+        Run {
+            params: self.model.params,
+            plate: self.model.shaker,
+            opts,
+            co,
+            start,
+            track: Tracking {
+                efoldings_cap: cap,
+                track_periods: horizon_sections,
+                extra_windows: if cap.is_some() { self.so.windows } else { 0 },
+                no_lyapunov,
+            },
+        }
+    }
+
+    fn cap(&self) -> Option<f64> {
+        (self.so.repeats > 0).then_some(self.so.efoldings)
+    }
+}
+
+impl Task for PointTest {
+    type Output = (Classification, Sensitivity);
+
+    fn start(&mut self) -> Result<Vec<Run>, SimError> {
+        Ok(vec![self.run(
+            self.co,
+            self.model.opts,
+            (0.0, 0.0),
+            self.cap(),
+            false,
+        )])
+    }
+
+    fn run_done(&mut self, i: usize, mut r: Classification) -> Result<Vec<Run>, SimError> {
+        let (co, so) = (self.co, self.so);
+        if i > 0 {
+            let base = self.base.as_ref().expect("repeats follow the base run");
+            if self.trigger == Trigger::Aperiodic && r.period.is_none() {
+                r.chaotic = base.chaotic;
+                r.lyapunov = base.lyapunov;
+            }
+            self.repeats[i - 1] = Some(r);
+            return Ok(Vec::new());
+        }
+        let base = r;
+        self.trigger = if so.repeats == 0 {
+            Trigger::None
+        } else if base.period.is_none() && !base.stopped_early {
+            Trigger::Aperiodic
+        } else if base.transient_efoldings.is_some_and(|g| g >= so.efoldings) {
+            Trigger::Growth
+        } else if !co.full_length && base.periods_simulated > so.horizon {
+            Trigger::Late
+        } else {
+            Trigger::None
         };
-        classify_from(model.params, model.shaker, opts, co, start, track)
-    };
-    let cap = (so.repeats > 0).then_some(so.efoldings);
-    let base = run(co, model.opts, (0.0, 0.0), cap, false)?;
-    let trigger = if so.repeats == 0 {
-        Trigger::None
-    } else if base.period.is_none() && !base.stopped_early {
-        Trigger::Aperiodic
-    } else if base.transient_efoldings.is_some_and(|g| g >= so.efoldings) {
-        Trigger::Growth
-    } else if !co.full_length && base.periods_simulated > so.horizon {
-        Trigger::Late
-    } else {
-        Trigger::None
-    };
-    let mut runs = vec![base];
-    if trigger != Trigger::None {
+        self.base = Some(base);
+        if self.trigger == Trigger::None {
+            return Ok(Vec::new());
+        }
         // Repeats of an aperiodic run stop at `repeat_periods` (still aperiodic then: counted
         // as aperiodic, chaotic or not by their own Lyapunov exponent); those of a decided run
         // run as long as it may.
-        let co_r = if trigger == Trigger::Aperiodic {
+        let aperiodic = self.trigger == Trigger::Aperiodic;
+        let co_r = if aperiodic {
             ClassifyOptions {
                 max_natural_periods: so.repeat_periods.min(co.max_natural_periods),
                 ..co
@@ -306,61 +379,65 @@ pub fn classify_sensitive(
         } else {
             co
         };
+        let mut runs = Vec::with_capacity(so.repeats as usize);
         for j in 1..=so.repeats {
-            let (start, opts) = repeat_setup(j, so.repeats, so.perturbation, model.opts)?;
+            let (start, opts) = repeat_setup(j, so.repeats, so.perturbation, self.model.opts)?;
             // A repeat of an aperiodic run only asks whether another attractor is reached; the
             // chaos verdict is tested on the base run's further Lyapunov windows.
-            let aperiodic = trigger == Trigger::Aperiodic;
-            let mut r = run(co_r, opts, start, None, aperiodic)?;
-            if aperiodic && r.period.is_none() {
-                r.chaotic = base.chaotic;
-                r.lyapunov = base.lyapunov;
+            runs.push(self.run(co_r, opts, start, None, aperiodic));
+        }
+        self.repeats = vec![None; runs.len()];
+        Ok(runs)
+    }
+
+    fn finish(self) -> (Classification, Sensitivity) {
+        let threshold = self.cap();
+        let base = self.base.expect("the base run is done");
+        let mut runs = vec![base];
+        runs.extend(self.repeats.into_iter().flatten());
+        // Each run's outcome, then the base run's chaos verdicts on its further Lyapunov
+        // windows (as the base outcome with `chaotic` set by the window).
+        let mut votes: Vec<(Outcome, usize)> = runs
+            .iter()
+            .enumerate()
+            .map(|(i, r)| (Outcome::of(r), i))
+            .collect();
+        if let Some((chaotic, n)) = base.chaos_votes {
+            let o = Outcome::of(&base);
+            for w in 0..n {
+                votes.push((
+                    Outcome {
+                        chaotic: w < chaotic,
+                        ..o
+                    },
+                    0,
+                ));
             }
-            runs.push(r);
         }
-    }
-    // Each run's outcome, then the base run's chaos verdicts on its further Lyapunov windows
-    // (as the base outcome with `chaotic` set by the window).
-    let mut votes: Vec<(Outcome, usize)> = runs
-        .iter()
-        .enumerate()
-        .map(|(i, r)| (Outcome::of(r), i))
-        .collect();
-    if let Some((chaotic, n)) = base.chaos_votes {
-        let o = Outcome::of(&base);
-        for w in 0..n {
-            votes.push((
-                Outcome {
-                    chaotic: w < chaotic,
-                    ..o
-                },
-                0,
-            ));
+        let mut outcomes: Vec<(Outcome, u32, usize)> = Vec::new();
+        for (o, i) in votes.iter().copied() {
+            match outcomes.iter_mut().find(|e| e.0 == o) {
+                Some(e) => e.1 += 1,
+                None => outcomes.push((o, 1, i)),
+            }
         }
-    }
-    let mut outcomes: Vec<(Outcome, u32, usize)> = Vec::new();
-    for (o, i) in votes.iter().copied() {
-        match outcomes.iter_mut().find(|e| e.0 == o) {
-            Some(e) => e.1 += 1,
-            None => outcomes.push((o, 1, i)),
+        let total = votes.len() as u32;
+        // Most frequent first; ties in run order (stable sort).
+        outcomes.sort_by_key(|e| std::cmp::Reverse(e.1));
+        // The reported run: the first one with the most frequent outcome (a vote of a further
+        // window of the base run reports the base run with that window's verdict).
+        let mut reported = runs[outcomes[0].2];
+        if Outcome::of(&reported) != outcomes[0].0 {
+            reported.chaotic = outcomes[0].0.chaotic;
         }
+        let sensitivity = Sensitivity {
+            trigger: self.trigger,
+            sensitive: outcomes.len() > 1,
+            outcomes: outcomes.iter().map(|e| (e.0, e.1)).collect(),
+            runs: total,
+            efoldings: base.transient_efoldings,
+            threshold,
+        };
+        (reported, sensitivity)
     }
-    let total = votes.len() as u32;
-    // Most frequent first; ties in run order (stable sort).
-    outcomes.sort_by_key(|e| std::cmp::Reverse(e.1));
-    // The reported run: the first one with the most frequent outcome (a vote of a further
-    // window of the base run reports the base run with that window's verdict).
-    let mut reported = runs[outcomes[0].2];
-    if Outcome::of(&reported) != outcomes[0].0 {
-        reported.chaotic = outcomes[0].0.chaotic;
-    }
-    let sensitivity = Sensitivity {
-        trigger,
-        sensitive: outcomes.len() > 1,
-        outcomes: outcomes.iter().map(|e| (e.0, e.1)).collect(),
-        runs: total,
-        efoldings: base.transient_efoldings,
-        threshold: cap,
-    };
-    Ok((reported, sensitivity))
 }

@@ -4,10 +4,11 @@
 
 use std::time::Instant as WallClock;
 
-use bistable_core::{Classification, ClassifyOptions, SimError};
+use bistable_core::{Classification, ClassifyOptions, SimError, Width};
 
-use crate::parallel::{self, Threads};
-use crate::sensitivity::{classify_sensitive, Sensitivity, SensitivityOptions};
+use crate::ensemble::{self, Run, Task};
+use crate::parallel::Threads;
+use crate::sensitivity::{classify_sensitive, PointTest, Sensitivity, SensitivityOptions};
 use crate::Model;
 
 /// One classified point.
@@ -41,30 +42,67 @@ pub fn classify_point_with(
     })
 }
 
-/// Classifies `model` at every `(Ω, V)` of `points` on `threads` threads. Each result (a point
-/// that cannot be simulated, e.g. with `Ω <= 0`, gives an error) is passed with its index to
-/// `done` on the calling thread as it completes, in completion order: `done` is the progress
-/// callback and the place to store or write results, and it cancels the sweep by returning an
-/// error (points in progress finish and are dropped), which is returned.
+/// Classifies `model` at every `(Ω, V)` of `points` on `threads` threads, `width` trajectories
+/// per thread in SIMD lanes ([`crate::ensemble`]; [`Width::One`]: one run at a time, the
+/// results are the same). Each result (a point that cannot be simulated, e.g. with `Ω <= 0`,
+/// gives an error) is passed with its index to `done` on the calling thread as it completes, in
+/// completion order: `done` is the progress callback and the place to store or write results,
+/// and it cancels the sweep by returning an error (points in progress are dropped), which is
+/// returned. A point's `wall_time_s` is the time from its start to its end; with lanes, the
+/// point shared its thread with the other lanes' points meanwhile.
 pub fn classify_points_with<E>(
     model: &Model,
     points: &[(f64, f64)],
     options: ClassifyOptions,
     sensitivity: SensitivityOptions,
     threads: Threads,
+    width: Width,
     done: impl FnMut(usize, Result<Classified, SimError>) -> Result<(), E>,
 ) -> Result<(), E> {
-    parallel::run(
+    ensemble::run(
         points,
         threads,
+        width,
         |&(w, v)| {
-            model
-                .at(w, v)
-                .map_err(SimError::from)
-                .and_then(|m| classify_point_with(&m, options, sensitivity))
+            let m = model.at(w, v)?;
+            Ok(TimedPoint {
+                model: m,
+                test: PointTest::new(&m, options, sensitivity),
+                start: WallClock::now(),
+            })
         },
         done,
     )
+}
+
+/// A point of a sweep: its sensitivity test, timed.
+struct TimedPoint {
+    model: Model,
+    test: PointTest,
+    start: WallClock,
+}
+
+impl Task for TimedPoint {
+    type Output = Classified;
+
+    fn start(&mut self) -> Result<Vec<Run>, SimError> {
+        self.test.start()
+    }
+
+    fn run_done(&mut self, i: usize, result: Classification) -> Result<Vec<Run>, SimError> {
+        self.test.run_done(i, result)
+    }
+
+    fn finish(self) -> Classified {
+        let wall_time_s = self.start.elapsed().as_secs_f64();
+        let (classification, sensitivity) = self.test.finish();
+        Classified {
+            model: self.model,
+            classification,
+            sensitivity,
+            wall_time_s,
+        }
+    }
 }
 
 /// The indices `0..n` in an order that spreads over the whole range early (a stride coprime
@@ -117,6 +155,7 @@ mod tests {
             ClassifyOptions::default(),
             SensitivityOptions::default(),
             Threads::new(2).unwrap(),
+            Width::Eight,
             |i, r| {
                 got[i] = Some(r);
                 Ok::<(), ()>(())
@@ -136,6 +175,7 @@ mod tests {
             ClassifyOptions::default(),
             SensitivityOptions::default(),
             Threads::new(1).unwrap(),
+            Width::Four,
             |_, _| Err("cancelled"),
         );
         assert_eq!(r, Err("cancelled"));

@@ -19,7 +19,7 @@ use bistable_analysis::sweep::interleaved;
 use bistable_analysis::Model;
 use bistable_core::{ClassifyOptions, ResponseClass, Well};
 
-use crate::common::{threads, CommonArgs};
+use crate::common::{lanes, threads, CommonArgs};
 use crate::error::CliError;
 use crate::map::OutLock;
 use crate::output::{print_json, print_text, CsvFile, Field};
@@ -129,6 +129,11 @@ pub struct BasinsArgs {
     /// Worker threads [default: all cores].
     #[arg(long, value_name = "N")]
     pub threads: Option<usize>,
+
+    /// Trajectories each thread advances together in SIMD lanes: 1 (one at a time), 4 (AVX2)
+    /// or 8 (AVX-512) [default: 4]. The results are the same for every width.
+    #[arg(long, value_name = "N")]
+    pub lanes: Option<usize>,
 }
 
 /// CSV header of `basins`.
@@ -187,6 +192,8 @@ struct Summary {
     resumed: usize,
     failed: usize,
     threads: usize,
+    /// Trajectories per thread in SIMD lanes.
+    lanes: usize,
     wall_time_s: f64,
     attractors: Vec<AttractorJson>,
     uncertainty: Vec<UncertainJson>,
@@ -253,6 +260,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     }
     .check()?;
     let threads = threads(args.threads, "--threads")?;
+    let width = lanes(args.lanes, "--lanes")?;
 
     let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
     let mut done: HashMap<Key, Cell> = HashMap::new();
@@ -283,7 +291,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     let mut failed = Vec::new();
     let mut computed = 0usize;
     let mut progress = Progress::new(todo.len() as f64, format!("basins: {} starts", todo.len()));
-    classify_starts(&model, phase, co, &todo, threads, |i, r| {
+    classify_starts(&model, phase, co, &todo, threads, width, |i, r| {
         match r {
             Ok(cell) => {
                 if let Some(c) = csv.as_mut() {
@@ -331,6 +339,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
             &epsilons,
             plate_x,
             threads,
+            width,
             |n, total| {
                 bar.set(n as f64 / total as f64);
                 Ok::<(), CliError>(())
@@ -357,6 +366,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
         resumed,
         failed: failed.len(),
         threads: threads.get(),
+        lanes: width.lanes(),
         wall_time_s: wall,
         attractors: attractors
             .iter()

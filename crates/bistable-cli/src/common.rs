@@ -5,7 +5,7 @@ use clap::{Args, ValueEnum};
 use serde::Serialize;
 
 use bistable_analysis::{Model, Threads};
-use bistable_core::{ChatterRule, Params, Sinusoid, SolverOptions};
+use bistable_core::{ChatterRule, Params, Sinusoid, SolverOptions, Width};
 
 use crate::error::CliError;
 
@@ -119,6 +119,16 @@ pub fn threads(requested: Option<usize>, option: &str) -> Result<Threads, CliErr
     match requested {
         Some(n) => Threads::new(n).ok_or_else(|| CliError::invalid_text(option, n, "must be >= 1")),
         None => Ok(Threads::all()),
+    }
+}
+
+/// The lane width: `requested` lanes per thread (1, 4 or 8; the error names `option`) or
+/// [`Width::preferred`].
+pub fn lanes(requested: Option<usize>, option: &str) -> Result<Width, CliError> {
+    match requested {
+        Some(n) => Width::from_lanes(n)
+            .ok_or_else(|| CliError::invalid_text(option, n, "must be 1, 4 or 8")),
+        None => Ok(Width::preferred()),
     }
 }
 

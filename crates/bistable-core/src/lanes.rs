@@ -298,13 +298,11 @@ pub enum Width {
 }
 
 impl Width {
-    /// The widest this CPU runs natively: 8 with AVX-512F, 4 otherwise (AVX2, or portable code
-    /// that the compiler vectorises as far as the target allows).
-    pub fn detect() -> Self {
-        #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            return Width::Eight;
-        }
+    /// The width sweeps use unless told otherwise: 4. Measured on an AMD EPYC (Zen 4, whose AVX-512 units execute
+    /// each 512-bit operation as two 256-bit halves), 8 lanes cost as much per lane-step as 4
+    /// and leave more lanes idle in a sweep, so the `map` is slower with 8
+    /// (`docs/benchmarks.md`); 4 lanes run in AVX2 registers where the CPU has them.
+    pub fn preferred() -> Self {
         Width::Four
     }
 
@@ -315,6 +313,15 @@ impl Width {
             4 => Some(Width::Four),
             8 => Some(Width::Eight),
             _ => None,
+        }
+    }
+
+    /// The narrower of `self` and `other`.
+    pub fn min_with(self, other: Width) -> Width {
+        if self.lanes() <= other.lanes() {
+            self
+        } else {
+            other
         }
     }
 
@@ -352,6 +359,6 @@ mod tests {
         check(F64x4::select(m, a, b), &|x, y| if x > y { x } else { y });
         assert_eq!(Width::from_lanes(8), Some(Width::Eight));
         assert_eq!(Width::from_lanes(3), None);
-        assert!(Width::detect().lanes() >= 4);
+        assert!(Width::preferred().lanes() >= 4);
     }
 }

@@ -5,12 +5,12 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use bistable_analysis::basins::{
-    basin_cell, count_uncertain, identify, plate_at, uncertainty_epsilons, uncertainty_exponent,
-    uncertainty_samples, uncertainty_starts, Attractor, Cell,
+    classify_starts, count_uncertain, identify, plate_at, uncertainty_epsilons,
+    uncertainty_exponent, uncertainty_samples, uncertainty_starts, Attractor, Cell,
 };
 use bistable_analysis::sensitivity::Outcome;
 use bistable_analysis::Threads;
-use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
+use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well, Width};
 
 use crate::common::{invalid, invalid_text, model, param_err, sim_err};
 
@@ -81,15 +81,21 @@ pub fn basin_cells<'py>(
         return Ok(PyList::empty(py));
     }
     let cells: Result<Vec<Cell>, SimError> = py.allow_threads(|| {
-        bistable_analysis::parallel::map(
+        let mut cells: Vec<Option<Result<Cell, SimError>>> = vec![None; starts.len()];
+        classify_starts(
+            &m,
+            phase,
+            co,
             &starts,
             threads,
-            |&(x0, v0)| basin_cell(&m, phase, x0, v0, co),
-            |_| Ok::<(), ()>(()),
+            Width::preferred(),
+            |i, r| {
+                cells[i] = Some(r);
+                Ok::<(), ()>(())
+            },
         )
-        .expect("no cancellation")
-        .into_iter()
-        .collect()
+        .expect("no cancellation");
+        cells.into_iter().flatten().collect()
     });
     let cells = cells.map_err(|e| sim_err(py, &e))?;
     let out = PyList::empty(py);

@@ -7,7 +7,7 @@ use bistable_analysis::record::Record;
 use bistable_analysis::sensitivity::SensitivityOptions;
 use bistable_analysis::sweep::{classify_point_with, classify_points_with};
 use bistable_analysis::thresholds::{self, check_restitution};
-use bistable_core::{ClassifyOptions, Sinusoid};
+use bistable_core::{ClassifyOptions, Sinusoid, Width};
 
 use crate::common::{
     check_signals, model, param_err, positive, record_dict, sim_err, threads as threads_arg, Stop,
@@ -181,7 +181,7 @@ pub(crate) fn classify_many<'py>(
     let mut records: Vec<Option<Record>> = vec![None; points.len()];
     let (mut done, total) = (0usize, points.len());
     py.allow_threads(|| {
-        classify_points_with(&m, &points, co, so, threads, |i, r| {
+        classify_points_with(&m, &points, co, so, threads, Width::preferred(), |i, r| {
             let record = Record::new(&r?);
             done += 1;
             check_signals()?;

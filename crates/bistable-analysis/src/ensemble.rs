@@ -1,0 +1,439 @@
+//! Many classification runs at once: the runs of a sweep's items (a map point with its
+//! sensitivity repeats, a basin cell) advanced in the SIMD lanes of [`bistable_core::Batch`]es,
+//! one batch per thread and per solver setting.
+//!
+//! An item is a [`Task`]: it asks for classification runs, takes their results, may ask for
+//! more (the repeats of a suspect point) and then gives its output. [`run_alone`] makes its runs
+//! one after the other with [`classify_from`], in the order they were asked for; [`run`] spreads
+//! items over threads and, with a lane width above 1, keeps every lane of each thread's batches
+//! busy: a lane whose run is over takes the next run waiting (a repeat of a point in progress
+//! first, else the first run of the next item), so runs of uneven length leave no lane idle.
+//! Each lane follows bit for bit the run [`classify_from`] makes alone, so every output is the
+//! same for every width; only the order in which items complete differs.
+
+use std::collections::VecDeque;
+use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
+use std::sync::mpsc;
+
+use bistable_core::{
+    classify_from, Batch, Classification, ClassifyOptions, ClassifyRun, Event, Params, SimError,
+    Sinusoid, SolverOptions, Tracking, Width,
+};
+
+use crate::parallel::{self, Threads};
+
+/// One classification run ([`classify_from`]'s arguments).
+#[derive(Debug, Clone, Copy)]
+pub struct Run {
+    /// Damping and restitution.
+    pub params: Params,
+    /// The shaker.
+    pub plate: Sinusoid,
+    /// Tolerance and chatter rule.
+    pub opts: SolverOptions,
+    /// Classification settings.
+    pub co: ClassifyOptions,
+    /// Initial state `(x0, x0')` at `τ = 0`.
+    pub start: (f64, f64),
+    /// What to measure besides the class.
+    pub track: Tracking,
+}
+
+impl Run {
+    /// The run made alone.
+    pub fn classify(&self) -> Result<Classification, SimError> {
+        classify_from(
+            self.params,
+            self.plate,
+            self.opts,
+            self.co,
+            self.start,
+            self.track,
+        )
+    }
+}
+
+/// An item of a sweep, made of classification runs.
+pub trait Task {
+    /// What the item gives once its runs are done.
+    type Output;
+
+    /// The runs to make first (numbered from 0 in this order).
+    fn start(&mut self) -> Result<Vec<Run>, SimError>;
+
+    /// Takes the result of run `i`; returns further runs to make (numbered on from the runs
+    /// asked for so far).
+    fn run_done(&mut self, i: usize, result: Classification) -> Result<Vec<Run>, SimError>;
+
+    /// The output, once every run asked for is done.
+    fn finish(self) -> Self::Output;
+}
+
+/// Makes `task`'s runs one after the other, in the order they are asked for; the first run
+/// that fails ends the task with its error.
+pub fn run_alone<T: Task>(mut task: T) -> Result<T::Output, SimError> {
+    let mut queue: VecDeque<(usize, Run)> = task.start()?.into_iter().enumerate().collect();
+    let mut next = queue.len();
+    while let Some((i, run)) = queue.pop_front() {
+        let c = run.classify()?;
+        for r in task.run_done(i, c)? {
+            queue.push_back((next, r));
+            next += 1;
+        }
+    }
+    Ok(task.finish())
+}
+
+/// Computes the task `make(item)` for every item on `threads` threads, `width` lanes each, and
+/// passes each `(index, output)` to `done` on the calling thread as it completes (in completion
+/// order). A task fails with the error of its first failing run, counted in the order the runs
+/// were asked for, as [`run_alone`] does. `done` is the progress callback and cancels the sweep
+/// by returning an error: the workers stop at once, dropping the items in progress, and the
+/// error is returned. With [`Width::One`] each item is [`run_alone`].
+pub fn run<I: Sync, T: Task, E>(
+    items: &[I],
+    threads: Threads,
+    width: Width,
+    make: impl Fn(&I) -> Result<T, SimError> + Sync,
+    mut done: impl FnMut(usize, Result<T::Output, SimError>) -> Result<(), E>,
+) -> Result<(), E>
+where
+    T::Output: Send,
+{
+    if width == Width::One {
+        return parallel::run(items, threads, |item| make(item).and_then(run_alone), done);
+    }
+    if items.is_empty() {
+        return Ok(());
+    }
+    let next = AtomicUsize::new(0);
+    let stop = AtomicBool::new(false);
+    std::thread::scope(|s| {
+        let (tx, rx) = mpsc::channel::<(usize, Result<T::Output, SimError>)>();
+        for _ in 0..threads.get().min(items.len()) {
+            let tx = tx.clone();
+            let (next, stop, make) = (&next, &stop, &make);
+            s.spawn(move || {
+                let mut worker = Worker::new(width);
+                let mut pull = || {
+                    let i = next.fetch_add(1, Ordering::Relaxed);
+                    items.get(i).map(|item| (i, make(item)))
+                };
+                worker.work(&mut pull, stop, &mut |i, r| tx.send((i, r)).is_ok());
+            });
+        }
+        drop(tx);
+        let mut result = Ok(());
+        for (i, r) in rx.iter() {
+            result = done(i, r);
+            if result.is_err() {
+                break;
+            }
+        }
+        stop.store(true, Ordering::Relaxed);
+        result
+    })
+}
+
+/// A task in progress on a worker.
+struct Live<T> {
+    item: usize,
+    task: T,
+    /// Runs asked for so far.
+    asked: usize,
+    /// Runs asked for and not yet done.
+    open: usize,
+    /// The failed run with the lowest number, and its error.
+    failed: Option<(usize, SimError)>,
+}
+
+/// A run waiting for a lane, or in one: its task's slot and its number there.
+struct Job {
+    task: usize,
+    index: usize,
+    run: Run,
+}
+
+/// The runs of one solver setting (damping and options): a batch and the runs waiting for it.
+struct Group {
+    zeta: u64,
+    opts: SolverOptions,
+    batch: Batch,
+    queue: VecDeque<Job>,
+    /// Per lane: the run in it.
+    lanes: Vec<Option<(usize, usize, ClassifyRun)>>,
+}
+
+/// One thread's share of a sweep.
+struct Worker<T> {
+    width: Width,
+    groups: Vec<Group>,
+    tasks: Vec<Option<Live<T>>>,
+}
+
+impl<T: Task> Worker<T> {
+    fn new(width: Width) -> Self {
+        Self {
+            width,
+            groups: Vec::new(),
+            tasks: Vec::new(),
+        }
+    }
+
+    /// Takes items from `pull` until there are none, `stop` is set or `send` fails; each
+    /// finished item goes to `send`.
+    fn work(
+        &mut self,
+        pull: &mut impl FnMut() -> Option<(usize, Result<T, SimError>)>,
+        stop: &AtomicBool,
+        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+    ) {
+        let mut exhausted = false;
+        let mut stopped = Vec::new();
+        loop {
+            if stop.load(Ordering::Relaxed) {
+                return;
+            }
+            // New items while the first group (that of every item's first run) has lanes
+            // with nothing to do.
+            while !exhausted
+                && self
+                    .groups
+                    .first()
+                    .is_none_or(|g| g.queue.is_empty() && g.batch.free_lane().is_some())
+            {
+                match pull() {
+                    None => exhausted = true,
+                    Some((item, Err(e))) => {
+                        if !send(item, Err(e)) {
+                            return;
+                        }
+                    }
+                    Some((item, Ok(task))) => {
+                        if !self.begin(item, task, send) {
+                            return;
+                        }
+                    }
+                }
+                if !self.fill(send) {
+                    return;
+                }
+            }
+            if !self.fill(send) {
+                return;
+            }
+            if self.groups.iter().all(|g| g.batch.is_empty()) {
+                if exhausted {
+                    return;
+                }
+                continue;
+            }
+            for g in 0..self.groups.len() {
+                if self.groups[g].batch.is_empty() {
+                    continue;
+                }
+                stopped.clear();
+                let Group { batch, lanes, .. } = &mut self.groups[g];
+                batch.advance(
+                    &mut |lane: usize, e: &Event| {
+                        if let Some((_, _, run)) = lanes[lane].as_mut() {
+                            run.event(e);
+                        }
+                        ControlFlow::Continue(())
+                    },
+                    &mut stopped,
+                );
+                for (lane, r) in stopped.drain(..) {
+                    if !self.lane_stopped(g, lane, r, send) {
+                        return;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Starts `task` for `item`: queues its first runs.
+    fn begin(
+        &mut self,
+        item: usize,
+        mut task: T,
+        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+    ) -> bool {
+        let runs = match task.start() {
+            Ok(r) => r,
+            Err(e) => return send(item, Err(e)),
+        };
+        let slot = match self.tasks.iter().position(Option::is_none) {
+            Some(s) => s,
+            None => {
+                self.tasks.push(None);
+                self.tasks.len() - 1
+            }
+        };
+        self.tasks[slot] = Some(Live {
+            item,
+            task,
+            asked: 0,
+            open: 0,
+            failed: None,
+        });
+        self.ask(slot, runs, send)
+    }
+
+    /// Queues `runs` for the task in `slot` (finishing it if it has nothing left to do).
+    fn ask(
+        &mut self,
+        slot: usize,
+        runs: Vec<Run>,
+        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+    ) -> bool {
+        let live = self.tasks[slot].as_mut().expect("live task");
+        for run in runs {
+            let index = live.asked;
+            live.asked += 1;
+            live.open += 1;
+            let g = group_of(&mut self.groups, self.width, &run);
+            self.groups[g].queue.push_back(Job {
+                task: slot,
+                index,
+                run,
+            });
+        }
+        if live.open == 0 {
+            return self.finish(slot, send);
+        }
+        true
+    }
+
+    /// Puts waiting runs in free lanes.
+    fn fill(&mut self, send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool) -> bool {
+        for g in 0..self.groups.len() {
+            while let Some(lane) = self.groups[g].batch.free_lane() {
+                let Some(job) = self.groups[g].queue.pop_front() else {
+                    break;
+                };
+                let r = &job.run;
+                let started = ClassifyRun::start(r.params, r.plate, r.opts, r.co, r.start, r.track)
+                    .and_then(|(run, sim)| {
+                        let target = run.target();
+                        self.groups[g]
+                            .batch
+                            .put(lane, sim, target)
+                            .map_err(|(e, _)| match e {
+                                bistable_core::JoinError::Sim(e) => e,
+                                other => unreachable!("runs are grouped by setting: {other:?}"),
+                            })
+                            .map(|()| run)
+                    });
+                match started {
+                    Ok(run) => self.groups[g].lanes[lane] = Some((job.task, job.index, run)),
+                    Err(e) => {
+                        if !self.run_over(job.task, job.index, Err(e), send) {
+                            return false;
+                        }
+                    }
+                }
+            }
+        }
+        true
+    }
+
+    /// Handles a lane of group `g` that stopped at its target (or failed).
+    fn lane_stopped(
+        &mut self,
+        g: usize,
+        lane: usize,
+        r: Result<bool, SimError>,
+        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+    ) -> bool {
+        let group = &mut self.groups[g];
+        let (task, index, run) = group.lanes[lane].as_mut().expect("a run in the lane");
+        let (task, index) = (*task, *index);
+        let outcome = r.and_then(|_| {
+            let sim = group.batch.sim_mut(lane).expect("a simulator in the lane");
+            run.reached(sim)
+        });
+        let over = match outcome {
+            Ok(None) => match group.batch.retarget(lane, run.target()) {
+                Ok(()) => return true,
+                Err(e) => Err(e),
+            },
+            Ok(Some(c)) => Ok(c),
+            Err(e) => Err(e),
+        };
+        group.lanes[lane] = None;
+        group.batch.take(lane);
+        self.run_over(task, index, over, send)
+    }
+
+    /// Takes the result of run `index` of the task in `slot`.
+    fn run_over(
+        &mut self,
+        slot: usize,
+        index: usize,
+        result: Result<Classification, SimError>,
+        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+    ) -> bool {
+        let live = self.tasks[slot].as_mut().expect("live task");
+        live.open -= 1;
+        let more = match result {
+            Ok(c) if live.failed.is_none() => live.task.run_done(index, c),
+            Ok(_) => Ok(Vec::new()),
+            Err(e) => Err(e),
+        };
+        match more {
+            Ok(runs) => self.ask(slot, runs, send),
+            Err(e) => {
+                if live.failed.as_ref().is_none_or(|(i, _)| index < *i) {
+                    live.failed = Some((index, e));
+                }
+                if live.open == 0 {
+                    return self.finish(slot, send);
+                }
+                true
+            }
+        }
+    }
+
+    /// Sends the output of the task in `slot`, whose runs are all done.
+    fn finish(
+        &mut self,
+        slot: usize,
+        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+    ) -> bool {
+        let live = self.tasks[slot].take().expect("live task");
+        let out = match live.failed {
+            Some((_, e)) => Err(e),
+            None => Ok(live.task.finish()),
+        };
+        send(live.item, out)
+    }
+}
+
+/// The group for `run`'s setting, made if new.
+fn group_of(groups: &mut Vec<Group>, width: Width, run: &Run) -> usize {
+    let zeta = run.params.zeta().to_bits();
+    if let Some(g) = groups
+        .iter()
+        .position(|g| g.zeta == zeta && g.opts == run.opts)
+    {
+        return g;
+    }
+    // Runs of other settings than the first (the tolerance repeats of a suspect point) come a
+    // few at a time: narrower lanes leave fewer of them idle.
+    let width = if groups.is_empty() {
+        width
+    } else {
+        Width::Four.min_with(width)
+    };
+    let batch = Batch::new(width, &run.params, run.opts);
+    groups.push(Group {
+        zeta,
+        opts: run.opts,
+        lanes: (0..batch.lanes()).map(|_| None).collect(),
+        batch,
+        queue: VecDeque::new(),
+    });
+    groups.len() - 1
+}
