@@ -7,7 +7,7 @@ BISTABLE := target/release/bistable
 DEMO_MAP = $(BISTABLE) map --omega-range 0.2:3.5:60 --velocity-range 0.005:0.2:40 \
 	--out $(OUT)/map.csv --plot $(OUT)/map.png --json > $(OUT)/map_summary.json
 
-.PHONY: all setup build test test-rust lint demo bench stress stress-core clean
+.PHONY: all setup build test test-rust lint demo bench bench-ensemble stress stress-core clean
 
 all: build
 
@@ -66,6 +66,12 @@ demo: build $(DEMO_TARGETS)
 ## Criterion benches and the work-precision comparison with SciPy (writes docs/benchmarks.md).
 bench: setup
 	bash bench/run.sh
+
+## Ensembles in SIMD lanes against one trajectory at a time, and heyoka's batch mode
+## (docs/benchmarks.md, "Ensembles"); ENSEMBLE_FULL=1 adds the 300 x 200 map and the
+## 1,000 x 1,000 basins grid.
+bench-ensemble: setup
+	bash bench/ensemble.sh
 
 ## The long stress and fault campaign (docs/reliability.md): numerical long runs, FMU fault
 ## sequences/fuzzing/valgrind, ROS 2 fault tests. Each component adds its steps to STRESS_TARGETS.

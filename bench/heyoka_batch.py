@@ -38,7 +38,8 @@ heyoka integrate N independent trajectories in lanes of 4 or 8 than one after an
 - Threads: heyoka's TBB pool is limited to ``--threads`` (default 1); the integration itself is
   single-threaded in every mode.
 
-Install (heyoka is not in ``scripts/requirements.txt``): ``pip install heyoka==7.13.2`` into
+Install (heyoka is not in ``scripts/requirements.txt``; ``bench/requirements.txt`` pins it and
+``bench/ensemble.sh`` installs it): ``pip install heyoka==7.13.2`` into
 ``.venv`` or any venv (the wheel bundles LLVM; numpy comes with it).
 
 Command line (markdown table on stdout; ``--json FILE`` for the numbers):
