@@ -21,6 +21,7 @@ pub mod checkpoint;
 pub mod classify;
 pub mod codec;
 pub mod events;
+pub mod interrupt;
 pub mod params;
 pub mod potential;
 pub mod ramp;

@@ -59,6 +59,11 @@ pub enum SimError {
         /// Instant of the step that overflowed.
         t: f64,
     },
+    /// The check installed by [`crate::interrupt::with_check`] asked to stop (e.g. Ctrl-C).
+    Interrupted {
+        /// Instant where the simulator stopped.
+        t: f64,
+    },
     /// A rejected parameter or initial state.
     Param(ParamError),
 }
@@ -84,6 +89,7 @@ impl fmt::Display for SimError {
             SimError::NonFinite { t } => {
                 write!(f, "solution is no longer finite at t={t}; parameters out of scope")
             }
+            SimError::Interrupted { t } => write!(f, "interrupted at t={t}"),
             SimError::Param(e) => e.fmt(f),
         }
     }
@@ -496,6 +502,9 @@ impl Simulator {
         let mut empty_steps = 0u32;
         loop {
             if !self.live {
+                if crate::interrupt::stop_requested() {
+                    return Err(SimError::Interrupted { t: self.time() });
+                }
                 self.compute_step()?;
                 self.live = true;
                 self.stats.steps += 1;
