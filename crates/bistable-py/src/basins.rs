@@ -9,10 +9,9 @@ use bistable_analysis::basins::{
     uncertainty_samples, uncertainty_starts, Attractor, Cell,
 };
 use bistable_analysis::sensitivity::Outcome;
-use bistable_analysis::Threads;
 use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
 
-use crate::common::{invalid, invalid_text, model, param_err, sim_err};
+use crate::common::{invalid, invalid_text, model, param_err, sim_err, threads as threads_arg};
 
 fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -72,11 +71,7 @@ pub fn basin_cells<'py>(
     }
     .check()
     .map_err(|e| param_err(py, &e))?;
-    let threads = if threads == 0 {
-        Threads::all()
-    } else {
-        Threads::new(threads).ok_or_else(|| invalid(py, "threads", 0.0, "must be >= 1"))?
-    };
+    let threads = threads_arg(threads)?;
     if check_only {
         return Ok(PyList::empty(py));
     }
@@ -97,6 +92,24 @@ pub fn basin_cells<'py>(
         out.append(cell_dict(py, c)?)?;
     }
     Ok(out)
+}
+
+/// The cells of `list` (dicts of [`basin_cells`]); a bad one raises `ValueError` naming
+/// `name` and the row.
+fn cells_from(name: &str, list: &[Bound<'_, PyDict>]) -> PyResult<Vec<Cell>> {
+    list.iter()
+        .enumerate()
+        .map(|(i, d)| {
+            cell_from(d).map_err(|e| {
+                let why = e.value(d.py()).to_string();
+                invalid_text(
+                    name,
+                    format!("row {i}"),
+                    &format!("not a basin cell: {why}"),
+                )
+            })
+        })
+        .collect()
 }
 
 fn cell_from(d: &Bound<'_, PyDict>) -> PyResult<Cell> {
@@ -140,7 +153,7 @@ pub fn basin_attractors<'py>(
     py: Python<'py>,
     cells: Vec<Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyList>, Vec<usize>)> {
-    let cells: Vec<Cell> = cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let cells = cells_from("cells", &cells)?;
     let (attractors, index) = identify(&cells);
     let total = cells.len().max(1) as f64;
     let out = PyList::empty(py);
@@ -214,7 +227,7 @@ fn plan(py: Python<'_>, g: &Grid<'_>) -> PyResult<Plan> {
             return Err(invalid(py, "x0", x, "must be finite"));
         }
     }
-    let cells: Vec<Cell> = g.cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let cells = cells_from("cells", &g.cells)?;
     let (attractors, index) = identify(&cells);
     let samples = uncertainty_samples(&cells, &index, g.samples);
     let epsilons = uncertainty_epsilons(g.x_first, g.x_last, g.nx);
@@ -257,7 +270,7 @@ pub fn basin_uncertainty<'py>(
             &format!("must hold one cell per start ({})", p.starts.len()),
         ));
     }
-    let reached: Vec<Cell> = reached.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let reached = cells_from("reached", &reached)?;
     let unc = count_uncertain(&p.attractors, &p.samples, &p.epsilons, &p.starts, &reached);
     let out = PyList::empty(py);
     for u in &unc {

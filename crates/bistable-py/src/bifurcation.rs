@@ -73,6 +73,13 @@ pub(crate) fn bifurcation<'py>(
     } else {
         (omega, "omega")
     };
+    // The other one is not used, but must be a value the model accepts if it is given.
+    if let Some(w) = omega.filter(|_| by_omega) {
+        model(py, w, 0.0, zeta, restitution, tol, chatter)?;
+    }
+    if let Some(v) = velocity.filter(|_| !by_omega) {
+        model(py, 1.0, v, zeta, restitution, tol, chatter)?;
+    }
     let fixed = fixed.ok_or_else(|| {
         invalid_text(
             fixed_name,
@@ -106,7 +113,7 @@ pub(crate) fn bifurcation<'py>(
         check_period("branch_periods", p)
             .map_err(|_| invalid_text("branch_periods", p, "periods must be in [1, 64]"))?;
     }
-    let threads = threads_arg(py, threads)?;
+    let threads = threads_arg(threads)?;
     let options = BifurcationOptions {
         transient,
         record,

@@ -10,7 +10,8 @@ use bistable_analysis::thresholds::{self, check_restitution};
 use bistable_core::{ClassifyOptions, Sinusoid};
 
 use crate::common::{
-    check_signals, model, param_err, positive, record_dict, sim_err, threads as threads_arg, Stop,
+    check_signals, model, param_err, positive, record_dict, released, sim_err,
+    threads as threads_arg, Stop,
 };
 
 #[allow(clippy::too_many_arguments)]
@@ -116,9 +117,7 @@ pub(crate) fn classify<'py>(
         repeat_periods,
         lyapunov_windows,
     )?;
-    let point = py
-        .allow_threads(|| classify_point_with(&m, co, so))
-        .map_err(|e| sim_err(py, &e))?;
+    let point = released(py, || classify_point_with(&m, co, so), |e| sim_err(py, &e))?;
     record_dict(py, &Record::new(&point))
 }
 
@@ -177,7 +176,7 @@ pub(crate) fn classify_many<'py>(
         repeat_periods,
         lyapunov_windows,
     )?;
-    let threads = threads_arg(py, threads)?;
+    let threads = threads_arg(threads)?;
     let mut records: Vec<Option<Record>> = vec![None; points.len()];
     let (mut done, total) = (0usize, points.len());
     py.allow_threads(|| {

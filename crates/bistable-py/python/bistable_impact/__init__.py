@@ -25,6 +25,7 @@ from typing import Any, Dict, Optional
 
 import numpy as np
 
+from . import _check as check
 from . import _native
 from ._native import Simulator
 from ._table import Table
@@ -122,17 +123,18 @@ def simulate(
             (sticking when two impacts are less than ``1e-9`` apart).
         trace_dt: sampling interval of :attr:`SimulationResult.trace` (time units, > 0).
     """
+    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
     return SimulationResult(
         _native.simulate(
-            omega,
-            velocity,
-            t_end=t_end,
-            periods=periods,
-            zeta=zeta,
-            restitution=restitution,
-            tol=tol,
+            m["omega"],
+            m["velocity"],
+            t_end=check.optional_real("t_end", t_end),
+            periods=check.optional_real("periods", periods),
+            zeta=m["zeta"],
+            restitution=m["restitution"],
+            tol=m["tol"],
             chatter=chatter,
-            trace_dt=trace_dt,
+            trace_dt=check.optional_real("trace_dt", trace_dt),
         )
     )
 
@@ -194,25 +196,26 @@ def classify(
 
     The defaults are those of ``bistable classify`` (:data:`SENSITIVITY_DEFAULTS`).
     """
-    return _native.classify(
-        omega,
-        velocity,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
-        max_periods=max_periods,
-        full=full,
-        max_period=max_period,
-        period_tol=period_tol,
-        lyapunov_periods=lyapunov_periods,
-        repeats=repeats,
-        efoldings=efoldings,
-        perturbation=perturbation,
-        horizon=horizon,
-        repeat_periods=repeat_periods,
-        lyapunov_windows=lyapunov_windows,
+    options = check.classify_options(
+        dict(
+            zeta=zeta,
+            restitution=restitution,
+            tol=tol,
+            chatter=chatter,
+            max_periods=max_periods,
+            full=full,
+            max_period=max_period,
+            period_tol=period_tol,
+            lyapunov_periods=lyapunov_periods,
+            repeats=repeats,
+            efoldings=efoldings,
+            perturbation=perturbation,
+            horizon=horizon,
+            repeat_periods=repeat_periods,
+            lyapunov_windows=lyapunov_windows,
+        )
     )
+    return _native.classify(check.real("omega", omega), check.real("velocity", velocity), **options)
 
 
 def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict[str, Any]:
@@ -224,13 +227,17 @@ def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict
         restitution: ``e`` in ``[0, 1)``.
         omega: ``Ω`` (> 0), for the quasi-static threshold.
     """
-    return _native.thresholds_of(restitution, omega)
+    return _native.thresholds_of(
+        check.real("restitution", restitution), check.optional_real("omega", omega)
+    )
 
 
 def linspace(start: float, end: float, n: int) -> np.ndarray:
     """``n`` evenly spaced values from ``start`` to ``end``, both included exactly: the values
     of the CLI's ``A:B:N`` ranges (one formula, ``bistable_analysis::grid``)."""
-    return np.array(_native.linspace(start, end, n), dtype=float)
+    n = check.integer("n", n, 1, check.MAX_POINTS)
+    values = _native.linspace(check.real("start", start), check.real("end", end), n)
+    return np.array(values, dtype=float)
 
 
 from . import sweep  # noqa: E402  (uses the functions above)

@@ -13,6 +13,7 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from . import _check as check
 from . import _native
 from ._table import Table
 
@@ -76,20 +77,13 @@ def orbit(
         ValueError: a bad argument (named). RuntimeError: Newton failed (``no P-periodic orbit
         found from (x, v): ...``) or the simulation failed.
     """
-    if guess is not None:
-        if isinstance(guess, (str, bytes)) or len(guess) != 2:
-            raise ValueError(f"invalid value {guess!r} for 'guess': must be two finite numbers")
-        guess = (guess[0], guess[1])
+    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
     d = _native.orbit(
-        omega,
-        velocity,
-        period=period,
-        guess=guess,
-        settle=settle,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
+        period=check.integer("period", period, 1, 64),
+        guess=None if guess is None else check.pair("guess", guess),
+        settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
         chatter=chatter,
+        **m,
     )
     d["monodromy"] = np.asarray(d["monodromy"], dtype=float)
     return d
@@ -128,18 +122,18 @@ def continue_omega(
         threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
-    vs = [float(velocity)] if np.ndim(velocity) == 0 else [float(v) for v in velocity]
+    ws, vs = check.reals("omega", omega), check.reals("velocity", velocity)
+    check.grid(("omega", "velocity"), ws, vs)
+    m = check.model(dict(zeta=zeta, restitution=restitution, tol=tol))
     d = _native.continue_omega(
-        [float(w) for w in np.atleast_1d(omega)],
+        ws,
         vs,
-        period=period,
-        settle=settle,
+        period=check.integer("period", period, 1, 64),
+        settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
         method=method,
-        threads=threads,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
+        threads=check.threads(threads),
         chatter=chatter,
+        **m,
     )
     d["orbits"] = _orbits_frame(d)
     return d
@@ -189,20 +183,23 @@ def bifurcation(
         threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
+    if isinstance(branch_periods, (str, bytes)) or not hasattr(branch_periods, "__len__"):
+        raise TypeError("'branch_periods' must be a sequence of integers")
+    if len(branch_periods) > check.MAX_BRANCHES:
+        raise check.invalid("branch_periods", f"<{len(branch_periods)} values>", "at most 64 periods")
+    m = check.model(dict(zeta=zeta, restitution=restitution, tol=tol))
     d = _native.bifurcation(
         param,
-        [float(x) for x in np.atleast_1d(values)],
-        omega=omega,
-        velocity=velocity,
-        transient=transient,
-        record=record,
-        samples=samples,
-        branch_periods=[int(p) for p in branch_periods],
-        threads=threads,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
+        check.reals("values", values),
+        omega=check.optional_real("omega", omega),
+        velocity=check.optional_real("velocity", velocity),
+        transient=check.integer("transient", transient, 0, check.MAX_TRANSIENT),
+        record=check.integer("record", record, 1, 100_000_000),
+        samples=check.integer("samples", samples, 8, check.MAX_CYCLE_SAMPLES),
+        branch_periods=[check.integer("branch_periods", p, 1, 64) for p in branch_periods],
+        threads=check.threads(threads),
         chatter=chatter,
+        **m,
     )
     data = Table(d.pop("data")).to_pandas()
     data["kind"] = _KINDS[data["kind"].to_numpy()]
@@ -244,15 +241,15 @@ def energy_map(
         zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`.
     """
     d = _native.energy_map(
-        restitution,
-        u_range=u_range,
-        nx=nx,
-        ny=ny,
-        omega=omega,
-        velocity=velocity,
-        periods=periods,
-        zeta=zeta,
-        tol=tol,
+        check.real("restitution", restitution),
+        u_range=None if u_range is None else check.pair("u_range", u_range),
+        nx=check.integer("nx", nx, 1, check.MAX_POINTS),
+        ny=check.integer("ny", ny, 1, check.MAX_POINTS),
+        omega=check.optional_real("omega", omega),
+        velocity=check.optional_real("velocity", velocity),
+        periods=check.real("periods", periods),
+        zeta=check.real("zeta", zeta),
+        tol=check.real("tol", tol),
         chatter=chatter,
     )
     d["phase"] = Table(d["phase"])["phase"]
@@ -294,17 +291,14 @@ def spectrum(
         max_freq: highest frequency (units of ``Ω``, > 0) of the flatness.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
+    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
     d = _native.spectrum(
-        omega,
-        velocity,
-        transient=transient,
-        record=record,
-        samples=samples,
-        max_freq=max_freq,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
+        transient=check.integer("transient", transient, 0, check.MAX_TRANSIENT),
+        record=check.integer("record", record, 8, 1 << 26),
+        samples=check.integer("samples", samples, 4, 1 << 26),
+        max_freq=check.real("max_freq", max_freq),
         chatter=chatter,
+        **m,
     )
     d["spectrum"] = Table(d["spectrum"]).to_pandas()
     return d

@@ -6,8 +6,8 @@ import os
 import sys
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
-import numpy as np
 
+from . import _check as check
 from . import _native
 
 #: Columns of the map (the CLI map CSV's header, in order; defined once, in
@@ -118,12 +118,14 @@ def map(
     """
     import pandas as pd
 
-    if not (isinstance(chunk, int) and chunk >= 1):
-        raise ValueError(f"invalid value {chunk!r} for 'chunk': must be an integer >= 1")
+    chunk = check.integer("chunk", chunk, 1, check.MAX_POINTS)
+    threads = check.threads(threads)
+    client = check.client(client)
+    store = check.path("store", store)
     report: Optional[Progress] = _text_progress if progress is True else (progress or None)
     if report is not None and not callable(report):
         raise TypeError(f"'progress' must be a bool or a callable, not {type(progress).__name__}")
-    options = dict(
+    options = check.classify_options(dict(
         zeta=zeta,
         restitution=restitution,
         tol=tol,
@@ -139,10 +141,10 @@ def map(
         horizon=horizon,
         repeat_periods=repeat_periods,
         lyapunov_windows=lyapunov_windows,
-    )
-    w = np.atleast_1d(np.asarray(omega, dtype=float))
-    v = np.atleast_1d(np.asarray(velocity, dtype=float))
-    points = [(float(a), float(b)) for b in v for a in w]
+    ))
+    w, v = check.reals("omega", omega), check.reals("velocity", velocity)
+    check.grid(("omega", "velocity"), w, v)
+    points = [(a, b) for b in v for a in w]
     _native.classify_many([], **options)  # checks the options before any work is sent
     kept = _Store(store, zeta, restitution) if store is not None else None
     done: Dict[Point, Dict[str, Any]] = dict(kept.done) if kept else {}
