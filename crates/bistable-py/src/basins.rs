@@ -58,7 +58,7 @@ pub fn basin_cells<'py>(
         if x0.is_nan() || x0 < plate_x {
             return Err(invalid(
                 py,
-                "starts",
+                "x0",
                 x0,
                 &format!("x0 must not be below the plate (z = {plate_x} at this phase)"),
             ));

@@ -11,6 +11,7 @@ use bistable_analysis::Model;
 
 use crate::common::{check_signals, invalid, invalid_text, model, table, threads as threads_arg};
 use crate::common::{Col, Stop};
+use crate::common::{MAX_VELOCITY, OMEGA_RANGE};
 use crate::orbit::{check_period, orbit_rows};
 
 /// Most recorded cycles over all points of one call.
@@ -53,18 +54,14 @@ pub(crate) fn bifurcation<'py>(
     if values.is_empty() {
         return Err(invalid_text("values", "[]", "must have at least one value"));
     }
+    let (lo, hi) = OMEGA_RANGE;
     for &x in &values {
-        let ok = if by_omega {
-            x.is_finite() && x > 0.0
+        let (ok, rule) = if by_omega {
+            ((lo..=hi).contains(&x), "Ω must be in [1e-6, 1e6]")
         } else {
-            x.is_finite() && x >= 0.0
+            ((0.0..=MAX_VELOCITY).contains(&x), "V must be in [0, 1e6]")
         };
         if !ok {
-            let rule = if by_omega {
-                "Ω must be > 0"
-            } else {
-                "V must be >= 0"
-            };
             return Err(invalid(py, "values", x, rule));
         }
     }

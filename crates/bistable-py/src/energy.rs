@@ -53,7 +53,15 @@ pub(crate) fn energy_map<'py>(
         ));
     }
     // The overlaid run's settings are checked also when there is no overlay.
-    model(py, 1.0, 0.0, zeta, e, tol, chatter)?;
+    model(
+        py,
+        omega.unwrap_or(1.0),
+        velocity.unwrap_or(0.0),
+        zeta,
+        e,
+        tol,
+        chatter,
+    )?;
     let periods = positive(py, "periods", periods)?;
     let span = periods * omega.unwrap_or(1.0).max(1.0);
     if span.is_nan() || span > MAX_OVERLAY_SPAN {

@@ -569,15 +569,15 @@ impl PySimulator {
     /// A simulator that continues exactly as the one `data` was taken from.
     #[staticmethod]
     fn from_checkpoint(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
-        let c = Checkpoint::from_bytes(data).map_err(PyValueError::new_err)?;
+        let refused =
+            |why: String| PyValueError::new_err(format!("invalid checkpoint 'data': {why}"));
+        let c = Checkpoint::from_bytes(data).map_err(refused)?;
         let sim = Simulator::from_checkpoint(&c).map_err(|e| match e {
-            SimError::Param(p) => PyValueError::new_err(format!("invalid checkpoint: {p}")),
+            SimError::Param(p) => refused(p.to_string()),
             other => sim_err(py, &other),
         })?;
         if let Some(why) = unreachable_state(py, &sim) {
-            return Err(PyValueError::new_err(format!(
-                "invalid checkpoint: not a state a run can reach: {why}"
-            )));
+            return Err(refused(format!("not a state a run can reach: {why}")));
         }
         Ok(Self { sim })
     }

@@ -133,7 +133,7 @@ def simulate(
             zeta=m["zeta"],
             restitution=m["restitution"],
             tol=m["tol"],
-            chatter=chatter,
+            chatter=check.text("chatter", chatter),
             trace_dt=check.optional_real("trace_dt", trace_dt),
         )
     )

@@ -62,6 +62,12 @@ def real(name: str, value: Any) -> float:
         raise invalid(name, repr(value), "too large for a float") from None
 
 
+def text(name: str, value: Any) -> str:
+    if not isinstance(value, str):
+        raise _type_error(name, "a str", value)
+    return value
+
+
 def optional_real(name: str, value: Any) -> Optional[float]:
     return None if value is None else real(name, value)
 
@@ -138,6 +144,7 @@ def classify_options(o: dict) -> dict:
         out[k] = real(k, o[k])
     for k in ("efoldings", "perturbation", "horizon", "repeat_periods"):
         out[k] = optional_real(k, o[k])
+    out["chatter"] = text("chatter", o["chatter"])
     out["max_period"] = integer("max_period", o["max_period"], 1, 64)
     out["lyapunov_periods"] = integer("lyapunov_periods", o["lyapunov_periods"], 1, MAX_LYAPUNOV_PERIODS)
     if o["repeats"] is not None:
@@ -148,9 +155,12 @@ def classify_options(o: dict) -> dict:
 
 
 def model(o: dict) -> dict:
-    """The model's numbers among ``o`` (``omega, velocity, zeta, restitution, tol``), converted."""
+    """The model's settings among ``o`` (``omega, velocity, zeta, restitution, tol, chatter``),
+    converted."""
     out = dict(o)
     for k in ("omega", "velocity", "zeta", "restitution", "tol"):
         if k in o:
             out[k] = real(k, o[k])
+    if "chatter" in o:
+        out["chatter"] = text("chatter", o["chatter"])
     return out

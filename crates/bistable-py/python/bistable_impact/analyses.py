@@ -82,7 +82,7 @@ def orbit(
         period=check.integer("period", period, 1, 64),
         guess=None if guess is None else check.pair("guess", guess),
         settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
-        chatter=chatter,
+        chatter=check.text("chatter", chatter),
         **m,
     )
     d["monodromy"] = np.asarray(d["monodromy"], dtype=float)
@@ -132,7 +132,7 @@ def continue_omega(
         settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
         method=method,
         threads=check.threads(threads),
-        chatter=chatter,
+        chatter=check.text("chatter", chatter),
         **m,
     )
     d["orbits"] = _orbits_frame(d)
@@ -198,7 +198,7 @@ def bifurcation(
         samples=check.integer("samples", samples, 8, check.MAX_CYCLE_SAMPLES),
         branch_periods=[check.integer("branch_periods", p, 1, 64) for p in branch_periods],
         threads=check.threads(threads),
-        chatter=chatter,
+        chatter=check.text("chatter", chatter),
         **m,
     )
     data = Table(d.pop("data")).to_pandas()
@@ -250,7 +250,7 @@ def energy_map(
         periods=check.real("periods", periods),
         zeta=check.real("zeta", zeta),
         tol=check.real("tol", tol),
-        chatter=chatter,
+        chatter=check.text("chatter", chatter),
     )
     d["phase"] = Table(d["phase"])["phase"]
     d["u"] = Table(d["u"])["u"]
@@ -297,7 +297,7 @@ def spectrum(
         record=check.integer("record", record, 8, 1 << 26),
         samples=check.integer("samples", samples, 4, 1 << 26),
         max_freq=check.real("max_freq", max_freq),
-        chatter=chatter,
+        chatter=check.text("chatter", chatter),
         **m,
     )
     d["spectrum"] = Table(d["spectrum"]).to_pandas()

@@ -60,7 +60,7 @@ def _arguments(
         zeta=check.real("zeta", zeta),
         restitution=check.real("restitution", restitution),
         tol=check.real("tol", tol),
-        chatter=chatter,
+        chatter=check.text("chatter", chatter),
         max_periods=check.real("max_periods", max_periods),
         lyapunov_periods=check.integer("lyapunov_periods", lyapunov_periods, 1, check.MAX_LYAPUNOV_PERIODS),
     )
