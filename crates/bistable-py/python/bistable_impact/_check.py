@@ -79,9 +79,9 @@ def pair(name: str, value: Any) -> Tuple[float, float]:
     return (real(name, value[0]), real(name, value[1]))
 
 
-def reals(name: str, values: Any, min_len: int = 1) -> List[float]:
+def reals(name: str, values: Any) -> List[float]:
     """One real number or a sequence (list, tuple, numpy array) of them, as a list of at
-    least ``min_len`` and at most :data:`MAX_POINTS` values."""
+    least one and at most :data:`MAX_POINTS` values."""
     if isinstance(values, (str, bytes, dict, set)):
         raise _type_error(name, "a number or a sequence of numbers", values)
     if isinstance(values, numbers.Real) or getattr(values, "ndim", None) == 0:
@@ -90,8 +90,10 @@ def reals(name: str, values: Any, min_len: int = 1) -> List[float]:
         n = len(values)
     except TypeError:
         raise _type_error(name, "a number or a sequence of numbers", values) from None
-    if not min_len <= n <= MAX_POINTS:
-        raise invalid(name, f"<{n} values>", f"must have {min_len} to {MAX_POINTS} values")
+    if n < 1:
+        raise invalid(name, "[]", "must have at least one value")
+    if n > MAX_POINTS:
+        raise invalid(name, f"<{n} values>", f"must have at most {MAX_POINTS} values")
     out = []
     for v in values:
         if isinstance(v, (list, tuple)) or getattr(v, "ndim", 0) != 0:
