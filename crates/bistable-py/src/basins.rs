@@ -11,7 +11,9 @@ use bistable_analysis::basins::{
 use bistable_analysis::sensitivity::Outcome;
 use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
 
-use crate::common::{invalid, invalid_text, model, param_err, sim_err, threads as threads_arg};
+use crate::common::{
+    check_signals, invalid, invalid_text, model, param_err, sim_err, threads as threads_arg,
+};
 
 fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -75,18 +77,21 @@ pub fn basin_cells<'py>(
     if check_only {
         return Ok(PyList::empty(py));
     }
-    let cells: Result<Vec<Cell>, SimError> = py.allow_threads(|| {
-        bistable_analysis::parallel::map(
-            &starts,
-            threads,
-            |&(x0, v0)| basin_cell(&m, phase, x0, v0, co),
-            |_| Ok::<(), ()>(()),
-        )
-        .expect("no cancellation")
+    // Ctrl-C stops the grid after the cells in progress.
+    let cells = py
+        .allow_threads(|| {
+            bistable_analysis::parallel::map(
+                &starts,
+                threads,
+                |&(x0, v0)| basin_cell(&m, phase, x0, v0, co),
+                |_| check_signals(),
+            )
+        })
+        .map_err(|e| e.into_py(py))?;
+    let cells = cells
         .into_iter()
-        .collect()
-    });
-    let cells = cells.map_err(|e| sim_err(py, &e))?;
+        .collect::<Result<Vec<Cell>, SimError>>()
+        .map_err(|e| sim_err(py, &e))?;
     let out = PyList::empty(py);
     for c in &cells {
         out.append(cell_dict(py, c)?)?;

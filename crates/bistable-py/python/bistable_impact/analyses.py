@@ -69,9 +69,12 @@ def orbit(
         period: period of the orbit in shaker periods, ``[1, 64]``.
         guess: ``(x, x')`` at plate phase 0 to start Newton from; default: the section point
             after ``settle`` shaker periods from the paper's initial condition.
-        settle: shaker periods simulated for the default guess.
+        settle: shaker periods simulated for the default guess, ``[0, 1e6]``.
         zeta, restitution, tol, chatter: the model and solver, as for
             :func:`bistable_impact.simulate`.
+
+    ``floquet_exponent`` is None when the largest multiplier is 0 (an orbit that sticks).
+    Ctrl-C raises ``KeyboardInterrupt``.
 
     Raises:
         ValueError: a bad argument (named). RuntimeError: Newton failed (``no P-periodic orbit
@@ -117,9 +120,10 @@ def continue_omega(
         omega: the grid of ``Ω`` (> 0), evenly spaced (e.g. :func:`bistable_impact.linspace`).
         velocity: one ``V`` or several.
         period: ``[1, 64]`` shaker periods.
-        settle: shaker periods simulated at every ``Ω`` for the seeds.
+        settle: shaker periods simulated at every ``Ω`` for the seeds, ``[0, 1e6]``.
         method: ``'natural'`` or ``'arclength'``.
-        threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
+        threads: worker threads, ``[0, 1024]`` (0: all cores); the GIL is released, Ctrl-C
+            stops the run after the points in progress. ``len(omega)·len(velocity) <= 1e7``.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
     ws, vs = check.reals("omega", omega), check.reals("velocity", velocity)
@@ -174,13 +178,16 @@ def bifurcation(
 
     Args:
         param: ``'omega'`` or ``'velocity'``.
-        values: the values of the control parameter (``Ω > 0`` or ``V >= 0``).
-        omega, velocity: the fixed parameter.
-        transient, record: shaker periods skipped and recorded (``record >= 1``,
+        values: the values of the control parameter (``Ω`` in ``[1e-6, 1e6]`` or ``V`` in
+            ``[0, 1e6]``; at most 1e7 values).
+        omega, velocity: the fixed parameter (the other one, if given, must be a valid value).
+        transient, record: shaker periods skipped (``[0, 1e6]``) and recorded (``record >= 1``,
             ``record·len(values) <= 1e8``).
-        samples: dense-output samples per shaker period for the maxima (>= 8).
-        branch_periods: periods of the orbit branches (each ``[1, 64]``); empty: none.
-        threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
+        samples: dense-output samples per shaker period for the maxima, ``[8, 4096]``.
+        branch_periods: periods of the orbit branches (each ``[1, 64]``, at most 64 of them);
+            empty: none.
+        threads: worker threads, ``[0, 1024]`` (0: all cores); the GIL is released, Ctrl-C
+            stops the run after the points in progress.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
     if isinstance(branch_periods, (str, bytes)) or not hasattr(branch_periods, "__len__"):
@@ -236,9 +243,11 @@ def energy_map(
             ``u = −(1+e)/(1−e)·cos φ`` at ``φ = 0`` (with impacts: below the lowest one).
         nx, ny: cells along the phase and along ``u`` (the CLI draws 360 × 300;
             ``nx·ny <= 1e7``).
-        omega, velocity: the overlaid run (``Ω > 0``, ``V > 0``; both or neither).
-        periods: natural periods of the overlaid run (> 0).
-        zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`.
+        omega, velocity: the overlaid run (``Ω`` in ``[1e-6, 1e6]``, ``V`` in ``(0, 1e6]``;
+            both or neither).
+        periods: natural periods of the overlaid run (> 0, ``periods·max(omega, 1) <= 1e7``).
+        zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`
+            (checked also without the overlay).
     """
     d = _native.energy_map(
         check.real("restitution", restitution),
@@ -285,7 +294,7 @@ def spectrum(
 
     Args:
         omega, velocity: the shaker.
-        transient: shaker periods skipped.
+        transient: shaker periods skipped, ``[0, 1e6]``.
         record: shaker periods sampled (>= 8; resolution ``Ω/record``).
         samples: samples per shaker period (>= 4; ``record·samples <= 2^26``).
         max_freq: highest frequency (units of ``Ω``, > 0) of the flatness.

@@ -99,7 +99,8 @@ def basins(
     :func:`basin_uncertainty` measures the uncertainty exponent of the result.
 
     Args:
-        x0, v0: the grid's start positions (not below the plate at ``phase``) and velocities.
+        x0, v0: the grid's start positions (not below the plate at ``phase``) and velocities
+            (at most 1e7 starts in all).
         client: a ``dask.distributed`` Client: the starts go to its workers in tasks of
             ``chunk`` starts (each on one thread); without it, ``threads`` Rust threads here.
         Other arguments: as for ``bistable basins``.
@@ -149,7 +150,7 @@ def basin_uncertainty(
     Args:
         omega, velocity, phase, x0: as given to :func:`basins` for ``cells``.
         cells: the cells DataFrame that :func:`basins` returned for the grid ``x0 × v0``.
-        samples: cells sampled (>= 0; at most all of them).
+        samples: cells sampled, ``[0, 1e7]`` (at most all of them).
         client, chunk, threads: where the displaced starts are classified, as in
             :func:`basins`.
         Other arguments: the model and classification options given to :func:`basins`.

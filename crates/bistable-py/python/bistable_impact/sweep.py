@@ -98,7 +98,8 @@ def map(
     the CLI's grid. ``lyapunov_periods`` defaults to 300 as in ``bistable map``.
 
     Args:
-        omega, velocity: the grid's values of ``Ω`` (> 0) and ``V`` (>= 0).
+        omega, velocity: the grid's values of ``Ω`` and ``V`` (as for
+            :func:`bistable_impact.classify`; at most 1e7 points in all).
         client: a ``dask.distributed`` Client: the points go to its workers in tasks of
             ``chunk`` points (each on one thread); tasks lost with a worker are run again by
             Dask, and each point's result is taken once. Without a client, ``threads`` Rust
@@ -111,7 +112,7 @@ def map(
             without one every 64 points and when the sweep stops, also by Ctrl-C or an
             error), so a crashed or interrupted sweep resumes with only the missing points;
             at the end it is rewritten with the whole grid.
-        chunk: points per Dask task (>= 1).
+        chunk: points per Dask task, ``[1, 1e7]``.
         progress: ``True`` for a progress line on stderr, or a callable ``f(done, total)``
             (points) called after each point (no client) or each finished task (client).
         Other arguments: as for :func:`bistable_impact.classify`.
