@@ -6,8 +6,10 @@
 //! nondimensional model bit for bit.
 
 use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
-use bistable_core::interrupt::{with_check, CHECK_EVERY};
+use bistable_core::interrupt::{with_check, Check, CHECK_EVERY};
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
     Params, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator,
@@ -226,12 +228,11 @@ fn step_budget(radians: f64) -> u64 {
 /// The check installed in the core ([`bistable_core::interrupt`]) during an advance with
 /// `budget`: it stops the advance between two steps once more than `budget` have been computed
 /// (it is called every [`CHECK_EVERY`] steps), also when no event comes to stop it there.
-fn budget_check(budget: u64) -> impl FnMut() -> bool {
-    let mut calls = 0u64;
-    move || {
-        calls += 1;
-        calls > budget / u64::from(CHECK_EVERY) + 1
-    }
+fn budget_check(budget: u64) -> Check {
+    let calls = AtomicU64::new(0);
+    Arc::new(move || {
+        calls.fetch_add(1, Ordering::Relaxed) + 1 > budget / u64::from(CHECK_EVERY) + 1
+    })
 }
 
 impl Observer for Collect<'_> {

@@ -18,7 +18,7 @@ import pytest
 
 HERE = pathlib.Path(__file__).resolve().parent
 #: Hostile examples per group of functions (hostile_calls.py); >= 2,000 in all.
-HOSTILE_EXAMPLES = 800
+HOSTILE_EXAMPLES = 1500
 
 
 def _python(code, timeout):
@@ -34,7 +34,9 @@ def _python(code, timeout):
 
 def _outcome(call, timeout=20):
     """``call`` (an expression over ``bi``, ``sweep``, ``pd``) in a subprocess: the exception's
-    type and message, or ``returned``, and the wall time of the call."""
+    type and message, or ``returned``, and the CPU time of the call (its wall time on an idle
+    core: the calls run on the calling thread; CPU time keeps other work on a shared machine
+    from failing the 2 s limit, and the subprocess's timeout catches hangs)."""
     code = textwrap.dedent(
         f"""
         import json, time
@@ -44,13 +46,13 @@ def _outcome(call, timeout=20):
         CELLS = pd.DataFrame([dict(x0=0.0, v0=0.0, period=1, chaotic=False, final_well=1,
             anchor_x=0.0, anchor_v=0.0, at_rest_in_second_well=False, periods_simulated=20.0,
             **{{"class": "intrawell"}})])
-        t = time.monotonic()
+        t = time.process_time()
         try:
             r = {call}
             out = ("returned", repr(r)[:200])
         except BaseException as e:
             out = (type(e).__name__, str(e))
-        print(json.dumps([*out, time.monotonic() - t]))
+        print(json.dumps([*out, time.process_time() - t]))
         """
     )
     rc, out, err = _python(code, timeout)
@@ -191,6 +193,13 @@ LONG_CALLS = [
     "bi.Simulator(1.75, 0.07).advance_to(1e12, lambda e: None)",
     "bi.spectrum(2.45, 0.07, transient=1000000)",
     "bi.energy_map(omega=2.45, velocity=0.07, periods=4e6)",
+    # Many short points, and a few long ones on worker threads (stopped inside the points).
+    "bi.sweep.basins(2.2, 0.07, bi.linspace(0, 0.4, 300), bi.linspace(-0.1, 0.1, 300))",
+    "bi.bifurcation('omega', bi.linspace(2.0, 2.7, 2000), velocity=0.07)",
+    "bi.sweep.basins(337393, 0.07, [0.0, 0.1], [0.0], max_periods=1e5, threads=2)",
+    "bi.sweep.map([337393.0] * 4, [0.07], threads=2, max_periods=1e5)",
+    "bi.continue_omega(bi.linspace(2.0, 2.7, 4), 0.07, settle=1000000, threads=2)",
+    "bi.bifurcation('omega', [2.2, 2.45], velocity=0.07, transient=1000000, threads=2)",
 ]
 
 

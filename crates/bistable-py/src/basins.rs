@@ -12,7 +12,8 @@ use bistable_analysis::sensitivity::Outcome;
 use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
 
 use crate::common::{
-    check_signals, invalid, invalid_text, model, param_err, sim_err, threads as threads_arg,
+    check_signals, invalid, invalid_text, model, param_err, released, sim_err,
+    threads as threads_arg,
 };
 
 fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
@@ -77,17 +78,18 @@ pub fn basin_cells<'py>(
     if check_only {
         return Ok(PyList::empty(py));
     }
-    // Ctrl-C stops the grid after the cells in progress.
-    let cells = py
-        .allow_threads(|| {
+    let cells = released(
+        py,
+        || {
             bistable_analysis::parallel::map(
                 &starts,
                 threads,
                 |&(x0, v0)| basin_cell(&m, phase, x0, v0, co),
                 |_| check_signals(),
             )
-        })
-        .map_err(|e| e.into_py(py))?;
+        },
+        |e| e.into_py(py),
+    )?;
     let cells = cells
         .into_iter()
         .collect::<Result<Vec<Cell>, SimError>>()

@@ -9,7 +9,9 @@ use pyo3::types::{PyDict, PyList};
 use bistable_analysis::bifurcation::{compute, BifurcationOptions};
 use bistable_analysis::Model;
 
-use crate::common::{check_signals, invalid, invalid_text, model, table, threads as threads_arg};
+use crate::common::{
+    check_signals, invalid, invalid_text, model, released, table, threads as threads_arg,
+};
 use crate::common::{Col, Stop};
 use crate::common::{MAX_VELOCITY, OMEGA_RANGE};
 use crate::orbit::{check_period, orbit_rows};
@@ -117,9 +119,11 @@ pub(crate) fn bifurcation<'py>(
         samples,
         branch_periods,
     };
-    let data = py
-        .allow_threads(|| compute::<Stop>(&models, &options, threads, &mut |_| check_signals()))
-        .map_err(|e| e.into_py(py))?;
+    let data = released(
+        py,
+        || compute::<Stop>(&models, &options, threads, &mut |_| check_signals()),
+        |e| e.into_py(py),
+    )?;
 
     let out = PyDict::new(py);
     out.set_item("param", param)?;

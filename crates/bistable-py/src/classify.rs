@@ -179,7 +179,7 @@ pub(crate) fn classify_many<'py>(
     let threads = threads_arg(threads)?;
     let mut records: Vec<Option<Record>> = vec![None; points.len()];
     let (mut done, total) = (0usize, points.len());
-    py.allow_threads(|| {
+    let sweep = || {
         classify_points_with(&m, &points, co, so, threads, |i, r| {
             let record = Record::new(&r?);
             done += 1;
@@ -199,8 +199,8 @@ pub(crate) fn classify_many<'py>(
             records[i] = Some(record);
             Ok::<(), Stop>(())
         })
-    })
-    .map_err(|e| e.into_py(py))?;
+    };
+    released(py, sweep, |e| e.into_py(py))?;
     let out = PyList::empty(py);
     for r in records.iter().flatten() {
         out.append(record_dict(py, r)?)?;

@@ -3,8 +3,9 @@
 //! classify records as dicts, and the checks for Python signals (Ctrl-C): from the progress
 //! callbacks of long analyses ([`check_signals`]) and inside single runs ([`released`]).
 
-use std::cell::RefCell;
-use std::rc::Rc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::{Arc, Mutex};
+use std::thread::{self, ThreadId};
 use std::time::{Duration, Instant as WallClock};
 
 use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
@@ -197,37 +198,68 @@ impl<'py> FromPyObject<'py> for Real {
 /// Wall time between two checks for Python signals inside a run.
 const SIGNAL_INTERVAL: Duration = Duration::from_millis(20);
 
+/// The state of the interrupt check of one call (see [`released`]).
+struct Signals {
+    /// The calling thread: the one where Python runs signal handlers.
+    owner: ThreadId,
+    last: Mutex<WallClock>,
+    tripped: AtomicBool,
+    raised: Mutex<Option<PyErr>>,
+}
+
+impl Signals {
+    /// `true` once a signal handler raised: on the calling thread it runs the handlers (at most
+    /// every 20 ms), on other threads (the workers of a parallel analysis) it only reads what
+    /// the calling thread found.
+    fn check(&self) -> bool {
+        if self.tripped.load(Ordering::Relaxed) {
+            return true;
+        }
+        if thread::current().id() != self.owner {
+            return false;
+        }
+        {
+            let mut last = self.last.lock().unwrap_or_else(|p| p.into_inner());
+            if last.elapsed() < SIGNAL_INTERVAL {
+                return false;
+            }
+            *last = WallClock::now();
+        }
+        match Python::with_gil(|py| py.check_signals()) {
+            Ok(()) => false,
+            Err(e) => {
+                *self.raised.lock().unwrap_or_else(|p| p.into_inner()) = Some(e);
+                self.tripped.store(true, Ordering::Relaxed);
+                true
+            }
+        }
+    }
+}
+
 /// Runs `body` with the GIL released, checking for Python signals about every 20 ms from
-/// inside the simulations it runs on this thread (`bistable_core::interrupt`): Ctrl-C stops
-/// them (with `SimError::Interrupted`) and the call raises `KeyboardInterrupt` (or what the
-/// signal handler raised) instead of `body`'s own error, mapped by `error`.
+/// inside the simulations it runs, on this thread and on the workers of the parallel analyses
+/// it calls (`bistable_core::interrupt`): Ctrl-C stops them (with `SimError::Interrupted`) and
+/// the call raises `KeyboardInterrupt` (or what the signal handler raised) instead of `body`'s
+/// own error, mapped by `error`.
 pub(crate) fn released<T: Send, E: Send>(
     py: Python<'_>,
     body: impl FnOnce() -> Result<T, E> + Send,
     error: impl FnOnce(E) -> PyErr,
 ) -> PyResult<T> {
     let (result, raised) = py.allow_threads(|| {
-        let raised: Rc<RefCell<Option<PyErr>>> = Rc::default();
-        let slot = raised.clone();
-        let mut last = WallClock::now();
-        let check = move || {
-            if slot.borrow().is_some() {
-                return true;
-            }
-            if last.elapsed() < SIGNAL_INTERVAL {
-                return false;
-            }
-            last = WallClock::now();
-            match Python::with_gil(|py| py.check_signals()) {
-                Ok(()) => false,
-                Err(e) => {
-                    *slot.borrow_mut() = Some(e);
-                    true
-                }
-            }
-        };
-        let result = bistable_core::interrupt::with_check(check, body);
-        let raised = raised.borrow_mut().take();
+        let signals = Arc::new(Signals {
+            owner: thread::current().id(),
+            last: Mutex::new(WallClock::now()),
+            tripped: AtomicBool::new(false),
+            raised: Mutex::new(None),
+        });
+        let state = signals.clone();
+        let result = bistable_core::interrupt::with_check(Arc::new(move || state.check()), body);
+        let raised = signals
+            .raised
+            .lock()
+            .unwrap_or_else(|p| p.into_inner())
+            .take();
         (result, raised)
     });
     match raised {
@@ -260,7 +292,11 @@ impl Stop {
 
 /// Runs Python's signal handlers (with the GIL, from a thread that released it): `Err` with
 /// the handler's exception, e.g. `KeyboardInterrupt` after Ctrl-C, which cancels the
-/// computation that called it.
+/// computation that called it; also `Err` once the check of [`released`] found one (its
+/// exception is the one the call raises).
 pub(crate) fn check_signals() -> Result<(), Stop> {
+    if bistable_core::interrupt::poll() {
+        return Err(Stop::Py(PyRuntimeError::new_err("interrupted")));
+    }
     Python::with_gil(|py| py.check_signals()).map_err(Stop::Py)
 }

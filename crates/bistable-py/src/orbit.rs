@@ -259,8 +259,9 @@ pub(crate) fn continue_omega<'py>(
             .collect::<PyResult<Vec<_>>>()?;
         grids.push(ms);
     }
-    let curves: Vec<Curves> = py
-        .allow_threads(|| {
+    let curves: Vec<Curves> = released(
+        py,
+        || {
             grids
                 .iter()
                 .map(|ms| {
@@ -269,8 +270,9 @@ pub(crate) fn continue_omega<'py>(
                     })
                 })
                 .collect::<Result<Vec<_>, Stop>>()
-        })
-        .map_err(|e| e.into_py(py))?;
+        },
+        |e| e.into_py(py),
+    )?;
 
     let out = PyDict::new(py);
     out.set_item("period", period)?;

@@ -16,6 +16,8 @@ import operator
 import os
 from typing import Any, List, Optional, Sequence, Tuple
 
+import numpy as np
+
 from . import _native
 
 #: Most values of one grid, and most points (cells) of one map: the CLI's cap on ranges.
@@ -94,6 +96,8 @@ def reals(name: str, values: Any) -> List[float]:
         raise invalid(name, "[]", "must have at least one value")
     if n > MAX_POINTS:
         raise invalid(name, f"<{n} values>", f"must have at most {MAX_POINTS} values")
+    if isinstance(values, np.ndarray) and values.ndim == 1 and values.dtype.kind in "fiu":
+        return values.astype(float).tolist()  # numbers that fit a float: no check each
     out = []
     for v in values:
         if isinstance(v, (list, tuple)) or getattr(v, "ndim", 0) != 0:
