@@ -20,8 +20,8 @@ Every argument is checked before any work: a bad value raises ``ValueError`` (a 
 (``Ω`` in ``[1e-6, 1e6]``, ``V`` in ``[0, 1e6]``, ``ζ`` in ``[0, 10]``) and caps work sizes
 (grids 1e7 points as the CLI, transients 1e6 shaker periods, ...; the README's Python section
 lists them). Computations release the GIL; Ctrl-C raises ``KeyboardInterrupt`` within about
-20 ms inside single runs, and stops the sweeps, the continuation and the bifurcation data
-between points.
+20 ms, also inside the runs of the sweeps, the continuation and the bifurcation data on their
+worker threads.
 """
 
 from __future__ import annotations

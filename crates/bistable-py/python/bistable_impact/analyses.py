@@ -123,7 +123,7 @@ def continue_omega(
         settle: shaker periods simulated at every ``Ω`` for the seeds, ``[0, 1e6]``.
         method: ``'natural'`` or ``'arclength'``.
         threads: worker threads, ``[0, 1024]`` (0: all cores); the GIL is released, Ctrl-C
-            stops the run after the points in progress. ``len(omega)·len(velocity) <= 1e7``.
+            stops the run. ``len(omega)·len(velocity) <= 1e7``.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
     ws, vs = check.reals("omega", omega), check.reals("velocity", velocity)
@@ -187,7 +187,7 @@ def bifurcation(
         branch_periods: periods of the orbit branches (each ``[1, 64]``, at most 64 of them);
             empty: none.
         threads: worker threads, ``[0, 1024]`` (0: all cores); the GIL is released, Ctrl-C
-            stops the run after the points in progress.
+            stops the run.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
     if isinstance(branch_periods, (str, bytes)) or not hasattr(branch_periods, "__len__"):

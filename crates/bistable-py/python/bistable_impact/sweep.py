@@ -103,8 +103,8 @@ def map(
         client: a ``dask.distributed`` Client: the points go to its workers in tasks of
             ``chunk`` points (each on one thread); tasks lost with a worker are run again by
             Dask, and each point's result is taken once. Without a client, ``threads`` Rust
-            threads in this process (0: all cores), with the GIL released; Ctrl-C
-            (``KeyboardInterrupt``) stops the sweep after the points in progress.
+            threads in this process (``[0, 1024]``, 0: all cores), with the GIL released;
+            Ctrl-C (``KeyboardInterrupt``) stops the sweep, also the points in progress.
         store: a CSV file (the map CSV's columns) that keeps results: points already in it
             (same ``zeta`` and ``restitution``; the other options are not recorded in the
             file: resume with the same ones) are not computed again; finished points are
