@@ -6,7 +6,10 @@
 //! nondimensional model bit for bit.
 
 use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::Arc;
 
+use bistable_core::interrupt::{with_check, Check, CHECK_EVERY};
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
     Params, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator,
@@ -27,8 +30,15 @@ pub(crate) const MAX_CLOCK_SPAN: f64 = 4_503_599_627_370_496.0;
 
 /// Largest span `Ω·(τ_end − τ)` (time units when `Ω < 1`) of one `fmi2DoStep`: the work of a
 /// step grows with it (about 0.5 µs per shaker radian at the paper's baseline), so a longer step
-/// is refused rather than left to run for minutes; split it into several.
-pub(crate) const MAX_STEP_SPAN: f64 = 1e6;
+/// is refused rather than left to run for seconds; split it into several. Runs in the model's
+/// scope need at most about 4 core steps per radian, so a step of this span stays within half
+/// of [`MAX_STEP_BUDGET`].
+pub(crate) const MAX_STEP_SPAN: f64 = 5e4;
+
+/// Most core steps one `fmi2DoStep` may compute (see [`step_budget`]): at about 1 µs per core
+/// step on the slowest states measured (chatter with `e = 1`), a step stops with a Discard
+/// within about 0.4 s of wall time.
+pub(crate) const MAX_STEP_BUDGET: u64 = 400_000;
 
 /// Whether a sinusoid of frequency `omega` with origin `origin` is within the clock range at
 /// `now` (and the origin not after it).
@@ -203,14 +213,26 @@ struct Collect<'a> {
 }
 
 /// Most Taylor steps a step spanning `radians` (`max(Ω, 1)·Δτ`) may compute: beyond it the
-/// advance stops at the next event and the step is a Discard. Runs inside the model's scope take
-/// at most about 4 steps per radian (measured from chatter at Omega = 0.2 to Omega = 100, e from 0
-/// to 1), an eighth of the allowance; a state driven far outside it (the plate velocity V = 1e6,
-/// or a plate input of 1e24 in units of delta_x*omega0, whose oscillations need ever shorter
-/// steps) is stopped within about a second (at most 2e7 steps, some ten seconds, for the longest
-/// step allowed, `MAX_STEP_SPAN`) instead of integrating for hours.
+/// advance stops at the next event, or at the latest about 2,048 steps later
+/// ([`budget_check`]), and the step is a Discard. Runs inside the model's scope take at most
+/// about 4 steps per radian (measured from chatter at Omega = 0.2 to Omega = 100, e from 0 to
+/// 1), at least twice less than the allowance; a state driven far outside it (the plate
+/// velocity V = 1e6, a plate input of 1e24 in units of delta_x*omega0, whose oscillations need
+/// ever shorter steps, or e = 1 with zeta = 5 and omega0 = 1e8, chatter that never ends) is
+/// stopped after at most [`MAX_STEP_BUDGET`] steps, within about 0.4 s, instead of integrating
+/// for hours.
 fn step_budget(radians: f64) -> u64 {
-    (100_000.0 + 50.0 * radians.max(0.0)).min(2e7) as u64
+    (100_000.0 + 50.0 * radians.max(0.0)).min(MAX_STEP_BUDGET as f64) as u64
+}
+
+/// The check installed in the core ([`bistable_core::interrupt`]) during an advance with
+/// `budget`: it stops the advance between two steps once more than `budget` have been computed
+/// (it is called every [`CHECK_EVERY`] steps), also when no event comes to stop it there.
+fn budget_check(budget: u64) -> Check {
+    let calls = AtomicU64::new(0);
+    Arc::new(move || {
+        calls.fetch_add(1, Ordering::Relaxed) + 1 > budget / u64::from(CHECK_EVERY) + 1
+    })
 }
 
 impl Observer for Collect<'_> {
@@ -614,12 +636,14 @@ impl Model {
         };
         let obs_budget = obs.budget;
         let first_event = obs.events.len();
-        let advanced = self.sim.advance(tau_end, &mut obs);
+        let sim = &mut self.sim;
+        let advanced = with_check(budget_check(obs_budget), || sim.advance(tau_end, &mut obs));
         let at_event = obs.stopped;
         self.impulse = impulse_of(&events[first_event..]);
-        // Stopped by the observer for another reason than an early return: the work budget is
-        // spent.
-        let over_budget = matches!(advanced, Ok(false)) && !at_event;
+        // Stopped by the observer for another reason than an early return, or by the budget's
+        // check between events: the work budget is spent.
+        let over_budget = matches!(advanced, Ok(false)) && !at_event
+            || matches!(advanced, Err(SimError::Interrupted { .. }));
         // An event exactly at the end is not an early return (the rest of the instant's events
         // come with the next step).
         let early = at_event && self.sim.instant() < Instant::new(tau_end);
@@ -647,7 +671,11 @@ impl Model {
                 };
                 Ok(())
             }
-            Err(e @ (SimError::Zeno { .. } | SimError::NonFinite { .. })) => {
+            Err(
+                e @ (SimError::Zeno { .. }
+                | SimError::NonFinite { .. }
+                | SimError::Interrupted { .. }),
+            ) => {
                 let msg = if over_budget {
                     format!(
                         "more than {} integration steps in one step at t = {} s: the state is far outside the model's scope",

@@ -71,7 +71,7 @@ def test_basins_match_the_cli(cli_cells):
 def test_basins_refuse_starts_below_the_plate():
     pytest.importorskip("pandas")
     # At a quarter cycle the plate is at its top, V/Ω.
-    with pytest.raises(ValueError, match="starts"):
+    with pytest.raises(ValueError, match="for 'x0': x0 must not be below the plate"):
         bi.sweep.basins(OMEGA, VELOCITY, [0.0, 0.5], [0.0], phase=0.25)
     with pytest.raises(ValueError, match="phase"):
         bi.sweep.basins(OMEGA, VELOCITY, [0.5], [0.0], phase=1.5)

@@ -13,8 +13,6 @@
 
 use std::collections::VecDeque;
 use std::ops::ControlFlow;
-use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
 
 use bistable_core::{
     classify_from, Batch, Classification, ClassifyOptions, ClassifyRun, Event, Params, SimError,
@@ -96,7 +94,7 @@ pub fn run<I: Sync, T: Task, E>(
     threads: Threads,
     width: Width,
     make: impl Fn(&I) -> Result<T, SimError> + Sync,
-    mut done: impl FnMut(usize, Result<T::Output, SimError>) -> Result<(), E>,
+    done: impl FnMut(usize, Result<T::Output, SimError>) -> Result<(), E>,
 ) -> Result<(), E>
 where
     T::Output: Send,
@@ -104,36 +102,15 @@ where
     if width == Width::One {
         return parallel::run(items, threads, |item| make(item).and_then(run_alone), done);
     }
-    if items.is_empty() {
-        return Ok(());
-    }
-    let next = AtomicUsize::new(0);
-    let stop = AtomicBool::new(false);
-    std::thread::scope(|s| {
-        let (tx, rx) = mpsc::channel::<(usize, Result<T::Output, SimError>)>();
-        for _ in 0..threads.get().min(items.len()) {
-            let tx = tx.clone();
-            let (next, stop, make) = (&next, &stop, &make);
-            s.spawn(move || {
-                let mut worker = Worker::new(width);
-                let mut pull = || {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    items.get(i).map(|item| (i, make(item)))
-                };
-                worker.work(&mut pull, stop, &mut |i, r| tx.send((i, r)).is_ok());
-            });
-        }
-        drop(tx);
-        let mut result = Ok(());
-        for (i, r) in rx.iter() {
-            result = done(i, r);
-            if result.is_err() {
-                break;
-            }
-        }
-        stop.store(true, Ordering::Relaxed);
-        result
-    })
+    parallel::run_workers(
+        items,
+        threads,
+        |pull, send| {
+            let mut pull = || pull().map(|(i, item)| (i, make(item)));
+            Worker::new(width).work(&mut pull, send);
+        },
+        done,
+    )
 }
 
 /// A task in progress on a worker.
@@ -181,20 +158,16 @@ impl<T: Task> Worker<T> {
         }
     }
 
-    /// Takes items from `pull` until there are none, `stop` is set or `send` fails; each
-    /// finished item goes to `send`.
+    /// Takes items from `pull` until there are none and their tasks are done, or `send` fails
+    /// (the sweep is cancelled); each finished item goes to `send`.
     fn work(
         &mut self,
         pull: &mut impl FnMut() -> Option<(usize, Result<T, SimError>)>,
-        stop: &AtomicBool,
-        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
     ) {
         let mut exhausted = false;
         let mut stopped = Vec::new();
         loop {
-            if stop.load(Ordering::Relaxed) {
-                return;
-            }
             // New items while the first group (that of every item's first run) has lanes
             // with nothing to do.
             while !exhausted
@@ -258,7 +231,7 @@ impl<T: Task> Worker<T> {
         &mut self,
         item: usize,
         mut task: T,
-        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
     ) -> bool {
         let runs = match task.start() {
             Ok(r) => r,
@@ -286,7 +259,7 @@ impl<T: Task> Worker<T> {
         &mut self,
         slot: usize,
         runs: Vec<Run>,
-        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
     ) -> bool {
         let live = self.tasks[slot].as_mut().expect("live task");
         for run in runs {
@@ -307,7 +280,7 @@ impl<T: Task> Worker<T> {
     }
 
     /// Puts waiting runs in free lanes.
-    fn fill(&mut self, send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool) -> bool {
+    fn fill(&mut self, send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool) -> bool {
         for g in 0..self.groups.len() {
             while let Some(lane) = self.groups[g].batch.free_lane() {
                 let Some(job) = self.groups[g].queue.pop_front() else {
@@ -345,7 +318,7 @@ impl<T: Task> Worker<T> {
         g: usize,
         lane: usize,
         r: Result<bool, SimError>,
-        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
     ) -> bool {
         let group = &mut self.groups[g];
         let (task, index, run) = group.lanes[lane].as_mut().expect("a run in the lane");
@@ -373,7 +346,7 @@ impl<T: Task> Worker<T> {
         slot: usize,
         index: usize,
         result: Result<Classification, SimError>,
-        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
     ) -> bool {
         let live = self.tasks[slot].as_mut().expect("live task");
         live.open -= 1;
@@ -400,7 +373,7 @@ impl<T: Task> Worker<T> {
     fn finish(
         &mut self,
         slot: usize,
-        send: &mut impl FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
     ) -> bool {
         let live = self.tasks[slot].take().expect("live task");
         let out = match live.failed {

@@ -4,7 +4,13 @@
 
 use std::num::NonZeroUsize;
 use std::sync::atomic::{AtomicBool, AtomicUsize, Ordering};
-use std::sync::mpsc;
+use std::sync::mpsc::{self, RecvTimeoutError};
+use std::time::Duration;
+
+use bistable_core::interrupt;
+
+/// How often the calling thread calls its interrupt check while it waits for the workers.
+const POLL: Duration = Duration::from_millis(20);
 
 /// A number of worker threads (at least one).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -34,10 +40,40 @@ impl Threads {
 /// `done` is the progress callback and the cancellation point: when it returns an error the
 /// workers take no new items, the items in progress finish and are dropped, and the error is
 /// returned.
+///
+/// The calling thread's interrupt check ([`bistable_core::interrupt`]), if any, is installed
+/// on the workers too (their simulations stop when it asks, and `work` returns what they
+/// return then), and the calling thread calls it every 20 ms while it waits for results.
 pub fn run<T: Sync, R: Send, E>(
     items: &[T],
     threads: Threads,
     work: impl Fn(&T) -> R + Sync,
+    done: impl FnMut(usize, R) -> Result<(), E>,
+) -> Result<(), E> {
+    run_workers(
+        items,
+        threads,
+        |pull, send| {
+            while let Some((i, item)) = pull() {
+                if !send(i, work(item)) {
+                    break;
+                }
+            }
+        },
+        done,
+    )
+}
+
+/// The thread pool under [`run`], for workers that keep state across items (a batch of SIMD
+/// lanes, [`crate::ensemble`]): `worker(pull, send)` runs on each of `threads` threads (at
+/// most one per item); `pull()` hands out the next item with its index (`None` when there are
+/// none left or the run is cancelled) and `send(index, result)` passes a result to `done` on
+/// the calling thread (`false`: the run is cancelled, the worker should return). `done`, the
+/// interrupt check and cancellation behave as in [`run`].
+pub fn run_workers<'a, T: Sync, R: Send, E>(
+    items: &'a [T],
+    threads: Threads,
+    worker: impl Fn(&mut dyn FnMut() -> Option<(usize, &'a T)>, &mut dyn FnMut(usize, R) -> bool) + Sync,
     mut done: impl FnMut(usize, R) -> Result<(), E>,
 ) -> Result<(), E> {
     if items.is_empty() {
@@ -45,27 +81,47 @@ pub fn run<T: Sync, R: Send, E>(
     }
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
+    let check = interrupt::current();
     std::thread::scope(|s| {
         let (tx, rx) = mpsc::channel::<(usize, R)>();
         for _ in 0..threads.get().min(items.len()) {
             let tx = tx.clone();
-            let (next, stop, work) = (&next, &stop, &work);
+            let (next, stop, worker) = (&next, &stop, &worker);
+            let check = check.clone();
             s.spawn(move || {
-                while !stop.load(Ordering::Relaxed) {
-                    let i = next.fetch_add(1, Ordering::Relaxed);
-                    let Some(item) = items.get(i) else { break };
-                    if tx.send((i, work(item))).is_err() {
-                        break;
-                    }
+                let work_items = || {
+                    let mut pull = || {
+                        if stop.load(Ordering::Relaxed) {
+                            return None;
+                        }
+                        let i = next.fetch_add(1, Ordering::Relaxed);
+                        items.get(i).map(|item| (i, item))
+                    };
+                    let mut send =
+                        |i: usize, r: R| !stop.load(Ordering::Relaxed) && tx.send((i, r)).is_ok();
+                    worker(&mut pull, &mut send);
+                };
+                match check {
+                    Some(c) => interrupt::with_check(c, work_items),
+                    None => work_items(),
                 }
             });
         }
         drop(tx);
         let mut result = Ok(());
-        for (i, r) in rx.iter() {
-            result = done(i, r);
-            if result.is_err() {
-                break;
+        loop {
+            match rx.recv_timeout(POLL) {
+                Ok((i, r)) => {
+                    result = done(i, r);
+                    if result.is_err() {
+                        break;
+                    }
+                }
+                Err(RecvTimeoutError::Timeout) => {
+                    // What the check decides reaches the workers through their own calls.
+                    interrupt::poll();
+                }
+                Err(RecvTimeoutError::Disconnected) => break,
             }
         }
         stop.store(true, Ordering::Relaxed);

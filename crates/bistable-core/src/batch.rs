@@ -204,6 +204,11 @@ impl Batch {
             starts.clear();
             for &lane in &ready {
                 let slot = self.slots[lane].as_mut().expect("ready lanes are occupied");
+                if let Err(e) = slot.sim.interruption() {
+                    slot.running = false;
+                    stopped.push((lane, Err(e)));
+                    continue;
+                }
                 let start = match self.width {
                     Width::One => None,
                     _ => slot.sim.lane_start(),

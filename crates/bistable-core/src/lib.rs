@@ -22,6 +22,7 @@ pub mod checkpoint;
 pub mod classify;
 pub mod codec;
 pub mod events;
+pub mod interrupt;
 pub mod lanes;
 pub mod params;
 pub mod potential;

@@ -59,6 +59,11 @@ pub enum SimError {
         /// Instant of the step that overflowed.
         t: f64,
     },
+    /// The check installed by [`crate::interrupt::with_check`] asked to stop (e.g. Ctrl-C).
+    Interrupted {
+        /// Instant where the simulator stopped.
+        t: f64,
+    },
     /// A rejected parameter or initial state.
     Param(ParamError),
 }
@@ -84,6 +89,7 @@ impl fmt::Display for SimError {
             SimError::NonFinite { t } => {
                 write!(f, "solution is no longer finite at t={t}; parameters out of scope")
             }
+            SimError::Interrupted { t } => write!(f, "interrupted at t={t}"),
             SimError::Param(e) => e.fmt(f),
         }
     }
@@ -537,6 +543,7 @@ impl Simulator {
             match self.resume(target, obs)? {
                 Progress::Stopped(reached) => return Ok(reached),
                 Progress::NeedStep => {
+                    self.interruption()?;
                     self.compute_step()?;
                     self.step_ready(obs);
                 }
@@ -599,6 +606,16 @@ impl Simulator {
                 return Ok(Progress::Stopped(false));
             }
         }
+    }
+
+    /// [`SimError::Interrupted`] when the check installed by [`crate::interrupt::with_check`]
+    /// asks to stop (asked every [`crate::interrupt::CHECK_EVERY`] calls); called before each
+    /// step is computed, so the state stays consistent.
+    pub(crate) fn interruption(&self) -> Result<(), SimError> {
+        if crate::interrupt::stop_requested() {
+            return Err(SimError::Interrupted { t: self.time() });
+        }
+        Ok(())
     }
 
     /// Marks the step just computed as the current one, counts it and shows it to `obs`.

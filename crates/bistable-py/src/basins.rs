@@ -9,10 +9,12 @@ use bistable_analysis::basins::{
     uncertainty_exponent, uncertainty_samples, uncertainty_starts, Attractor, Cell,
 };
 use bistable_analysis::sensitivity::Outcome;
-use bistable_analysis::Threads;
-use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well, Width};
+use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
 
-use crate::common::{invalid, invalid_text, model, param_err, sim_err};
+use crate::common::{
+    check_signals, invalid, invalid_text, lanes as lanes_arg, model, param_err, released, sim_err,
+    threads as threads_arg,
+};
 
 fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
@@ -31,11 +33,11 @@ fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
 }
 
 /// Classifies the starts `(x0, v0)` at plate phase `phase` (cycles) on `threads` threads (0:
-/// all cores); one dict per start, in order (the `bistable basins` CSV columns without the
+/// all cores) of `lanes` trajectories each in SIMD lanes (1, 4 or 8); one dict per start, in order (the `bistable basins` CSV columns without the
 /// model's). With `check_only` only the arguments and the starts are checked (an empty list).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, phase, starts, zeta=0.02, restitution=0.85, tol=1e-16,
-    chatter="accumulation", max_periods=2000.0, lyapunov_periods=300, threads=0,
+    chatter="accumulation", max_periods=2000.0, lyapunov_periods=300, threads=0, lanes=4,
     check_only=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn basin_cells<'py>(
@@ -51,6 +53,7 @@ pub fn basin_cells<'py>(
     max_periods: f64,
     lyapunov_periods: u32,
     threads: usize,
+    lanes: usize,
     check_only: bool,
 ) -> PyResult<Bound<'py, PyList>> {
     let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
@@ -59,7 +62,7 @@ pub fn basin_cells<'py>(
         if x0.is_nan() || x0 < plate_x {
             return Err(invalid(
                 py,
-                "starts",
+                "x0",
                 x0,
                 &format!("x0 must not be below the plate (z = {plate_x} at this phase)"),
             ));
@@ -72,37 +75,50 @@ pub fn basin_cells<'py>(
     }
     .check()
     .map_err(|e| param_err(py, &e))?;
-    let threads = if threads == 0 {
-        Threads::all()
-    } else {
-        Threads::new(threads).ok_or_else(|| invalid(py, "threads", 0.0, "must be >= 1"))?
-    };
+    let threads = threads_arg(threads)?;
+    let width = lanes_arg(lanes)?;
     if check_only {
         return Ok(PyList::empty(py));
     }
-    let cells: Result<Vec<Cell>, SimError> = py.allow_threads(|| {
-        let mut cells: Vec<Option<Result<Cell, SimError>>> = vec![None; starts.len()];
-        classify_starts(
-            &m,
-            phase,
-            co,
-            &starts,
-            threads,
-            Width::preferred(),
-            |i, r| {
-                cells[i] = Some(r);
-                Ok::<(), ()>(())
-            },
-        )
-        .expect("no cancellation");
-        cells.into_iter().flatten().collect()
-    });
-    let cells = cells.map_err(|e| sim_err(py, &e))?;
+    let mut slots: Vec<Option<Result<Cell, SimError>>> = vec![None; starts.len()];
+    released(
+        py,
+        || {
+            classify_starts(&m, phase, co, &starts, threads, width, |i, r| {
+                slots[i] = Some(r);
+                check_signals()
+            })
+        },
+        |e| e.into_py(py),
+    )?;
+    let cells = slots
+        .into_iter()
+        .flatten()
+        .collect::<Result<Vec<Cell>, SimError>>()
+        .map_err(|e| sim_err(py, &e))?;
     let out = PyList::empty(py);
     for c in &cells {
         out.append(cell_dict(py, c)?)?;
     }
     Ok(out)
+}
+
+/// The cells of `list` (dicts of [`basin_cells`]); a bad one raises `ValueError` naming
+/// `name` and the row.
+fn cells_from(name: &str, list: &[Bound<'_, PyDict>]) -> PyResult<Vec<Cell>> {
+    list.iter()
+        .enumerate()
+        .map(|(i, d)| {
+            cell_from(d).map_err(|e| {
+                let why = e.value(d.py()).to_string();
+                invalid_text(
+                    name,
+                    format!("row {i}"),
+                    &format!("not a basin cell: {why}"),
+                )
+            })
+        })
+        .collect()
 }
 
 fn cell_from(d: &Bound<'_, PyDict>) -> PyResult<Cell> {
@@ -146,7 +162,7 @@ pub fn basin_attractors<'py>(
     py: Python<'py>,
     cells: Vec<Bound<'py, PyDict>>,
 ) -> PyResult<(Bound<'py, PyList>, Vec<usize>)> {
-    let cells: Vec<Cell> = cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let cells = cells_from("cells", &cells)?;
     let (attractors, index) = identify(&cells);
     let total = cells.len().max(1) as f64;
     let out = PyList::empty(py);
@@ -220,7 +236,7 @@ fn plan(py: Python<'_>, g: &Grid<'_>) -> PyResult<Plan> {
             return Err(invalid(py, "x0", x, "must be finite"));
         }
     }
-    let cells: Vec<Cell> = g.cells.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let cells = cells_from("cells", &g.cells)?;
     let (attractors, index) = identify(&cells);
     let samples = uncertainty_samples(&cells, &index, g.samples);
     let epsilons = uncertainty_epsilons(g.x_first, g.x_last, g.nx);
@@ -263,7 +279,7 @@ pub fn basin_uncertainty<'py>(
             &format!("must hold one cell per start ({})", p.starts.len()),
         ));
     }
-    let reached: Vec<Cell> = reached.iter().map(cell_from).collect::<PyResult<_>>()?;
+    let reached = cells_from("reached", &reached)?;
     let unc = count_uncertain(&p.attractors, &p.samples, &p.epsilons, &p.starts, &reached);
     let out = PyList::empty(py);
     for u in &unc {

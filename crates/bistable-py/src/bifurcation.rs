@@ -9,8 +9,11 @@ use pyo3::types::{PyDict, PyList};
 use bistable_analysis::bifurcation::{compute, BifurcationOptions};
 use bistable_analysis::Model;
 
-use crate::common::{check_signals, invalid, invalid_text, model, table, threads as threads_arg};
+use crate::common::{
+    check_signals, invalid, invalid_text, model, released, table, threads as threads_arg,
+};
 use crate::common::{Col, Stop};
+use crate::common::{MAX_VELOCITY, OMEGA_RANGE};
 use crate::orbit::{check_period, orbit_rows};
 
 /// Most recorded cycles over all points of one call.
@@ -53,18 +56,14 @@ pub(crate) fn bifurcation<'py>(
     if values.is_empty() {
         return Err(invalid_text("values", "[]", "must have at least one value"));
     }
+    let (lo, hi) = OMEGA_RANGE;
     for &x in &values {
-        let ok = if by_omega {
-            x.is_finite() && x > 0.0
+        let (ok, rule) = if by_omega {
+            ((lo..=hi).contains(&x), "Ω must be in [1e-6, 1e6]")
         } else {
-            x.is_finite() && x >= 0.0
+            ((0.0..=MAX_VELOCITY).contains(&x), "V must be in [0, 1e6]")
         };
         if !ok {
-            let rule = if by_omega {
-                "Ω must be > 0"
-            } else {
-                "V must be >= 0"
-            };
             return Err(invalid(py, "values", x, rule));
         }
     }
@@ -73,6 +72,13 @@ pub(crate) fn bifurcation<'py>(
     } else {
         (omega, "omega")
     };
+    // The other one is not used, but must be a value the model accepts if it is given.
+    if let Some(w) = omega.filter(|_| by_omega) {
+        model(py, w, 0.0, zeta, restitution, tol, chatter)?;
+    }
+    if let Some(v) = velocity.filter(|_| !by_omega) {
+        model(py, 1.0, v, zeta, restitution, tol, chatter)?;
+    }
     let fixed = fixed.ok_or_else(|| {
         invalid_text(
             fixed_name,
@@ -106,16 +112,18 @@ pub(crate) fn bifurcation<'py>(
         check_period("branch_periods", p)
             .map_err(|_| invalid_text("branch_periods", p, "periods must be in [1, 64]"))?;
     }
-    let threads = threads_arg(py, threads)?;
+    let threads = threads_arg(threads)?;
     let options = BifurcationOptions {
         transient,
         record,
         samples,
         branch_periods,
     };
-    let data = py
-        .allow_threads(|| compute::<Stop>(&models, &options, threads, &mut |_| check_signals()))
-        .map_err(|e| e.into_py(py))?;
+    let data = released(
+        py,
+        || compute::<Stop>(&models, &options, threads, &mut |_| check_signals()),
+        |e| e.into_py(py),
+    )?;
 
     let out = PyDict::new(py);
     out.set_item("param", param)?;

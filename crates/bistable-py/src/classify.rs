@@ -7,10 +7,11 @@ use bistable_analysis::record::Record;
 use bistable_analysis::sensitivity::SensitivityOptions;
 use bistable_analysis::sweep::{classify_point_with, classify_points_with};
 use bistable_analysis::thresholds::{self, check_restitution};
-use bistable_core::{ClassifyOptions, Sinusoid, Width};
+use bistable_core::{ClassifyOptions, Sinusoid};
 
 use crate::common::{
-    check_signals, model, param_err, positive, record_dict, sim_err, threads as threads_arg, Stop,
+    check_signals, lanes as lanes_arg, model, param_err, positive, record_dict, released, sim_err,
+    threads as threads_arg, Stop,
 };
 
 #[allow(clippy::too_many_arguments)]
@@ -116,13 +117,12 @@ pub(crate) fn classify<'py>(
         repeat_periods,
         lyapunov_windows,
     )?;
-    let point = py
-        .allow_threads(|| classify_point_with(&m, co, so))
-        .map_err(|e| sim_err(py, &e))?;
+    let point = released(py, || classify_point_with(&m, co, so), |e| sim_err(py, &e))?;
     record_dict(py, &Record::new(&point))
 }
 
-/// Classifies every `(omega, velocity)` of `points` on `threads` threads (0: all cores); the
+/// Classifies every `(omega, velocity)` of `points` on `threads` threads (0: all cores) of
+/// `lanes` trajectories each in SIMD lanes (1, 4 or 8; the records are the same); the
 /// records in the order of `points`; a point that fails raises. After each point, Python's
 /// signal handlers run (Ctrl-C raises `KeyboardInterrupt` and stops the sweep), `on_record`, if
 /// given, is called with the point's record (a dict) and `progress`, if given, with
@@ -131,7 +131,7 @@ pub(crate) fn classify<'py>(
 #[pyo3(signature = (points, zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation",
     max_periods=20000.0, full=false, max_period=16, period_tol=1e-8, lyapunov_periods=300,
     repeats=None, efoldings=None, perturbation=None, horizon=None, repeat_periods=None,
-    lyapunov_windows=None, threads=0, progress=None, on_record=None))]
+    lyapunov_windows=None, threads=0, lanes=4, progress=None, on_record=None))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn classify_many<'py>(
     py: Python<'py>,
@@ -152,6 +152,7 @@ pub(crate) fn classify_many<'py>(
     repeat_periods: Option<f64>,
     lyapunov_windows: Option<u32>,
     threads: usize,
+    lanes: usize,
     progress: Option<Py<PyAny>>,
     on_record: Option<Py<PyAny>>,
 ) -> PyResult<Bound<'py, PyList>> {
@@ -177,11 +178,12 @@ pub(crate) fn classify_many<'py>(
         repeat_periods,
         lyapunov_windows,
     )?;
-    let threads = threads_arg(py, threads)?;
+    let threads = threads_arg(threads)?;
+    let width = lanes_arg(lanes)?;
     let mut records: Vec<Option<Record>> = vec![None; points.len()];
     let (mut done, total) = (0usize, points.len());
-    py.allow_threads(|| {
-        classify_points_with(&m, &points, co, so, threads, Width::preferred(), |i, r| {
+    let sweep = || {
+        classify_points_with(&m, &points, co, so, threads, width, |i, r| {
             let record = Record::new(&r?);
             done += 1;
             check_signals()?;
@@ -200,8 +202,8 @@ pub(crate) fn classify_many<'py>(
             records[i] = Some(record);
             Ok::<(), Stop>(())
         })
-    })
-    .map_err(|e| e.into_py(py))?;
+    };
+    released(py, sweep, |e| e.into_py(py))?;
     let out = PyList::empty(py);
     for r in records.iter().flatten() {
         out.append(record_dict(py, r)?)?;

@@ -8,10 +8,14 @@ use pyo3::types::PyDict;
 
 use bistable_analysis::energy::{self, EnergyMap, ImpactPoint};
 
-use crate::common::{invalid, invalid_text, model, param_err, positive, sim_err, table, Col};
+use crate::common::{
+    invalid, invalid_text, model, param_err, positive, released, sim_err, table, Col,
+};
 
 /// Most cells of one map (about 240 MB while it is built).
 const MAX_CELLS: usize = 10_000_000;
+/// Largest `periods·max(Ω, 1)` of the overlaid run (its impacts are kept in memory).
+const MAX_OVERLAY_SPAN: f64 = 1e7;
 
 /// The energy map (see `bistable_impact.energy_map`).
 #[pyfunction]
@@ -48,6 +52,26 @@ pub(crate) fn energy_map<'py>(
             "nx and ny must be >= 1 with nx·ny <= 1e7",
         ));
     }
+    // The overlaid run's settings are checked also when there is no overlay.
+    model(
+        py,
+        omega.unwrap_or(1.0),
+        velocity.unwrap_or(0.0),
+        zeta,
+        e,
+        tol,
+        chatter,
+    )?;
+    let periods = positive(py, "periods", periods)?;
+    let span = periods * omega.unwrap_or(1.0).max(1.0);
+    if span.is_nan() || span > MAX_OVERLAY_SPAN {
+        return Err(invalid(
+            py,
+            "periods",
+            periods,
+            "periods·max(omega, 1) must be <= 1e7",
+        ));
+    }
     let impacts: Vec<ImpactPoint> = match (omega, velocity) {
         (None, None) => Vec::new(),
         (Some(w), Some(v)) => {
@@ -55,17 +79,8 @@ pub(crate) fn energy_map<'py>(
             if m.velocity() <= 0.0 {
                 return Err(invalid(py, "velocity", v, "must be > 0 for the overlay"));
             }
-            let t_end = positive(py, "periods", periods)? * TAU;
-            if !t_end.is_finite() {
-                return Err(invalid(
-                    py,
-                    "periods",
-                    periods,
-                    "too large (2π·N overflows)",
-                ));
-            }
-            py.allow_threads(|| energy::impacts(&m, t_end))
-                .map_err(|err| sim_err(py, &err))?
+            let t_end = periods * TAU;
+            released(py, || energy::impacts(&m, t_end), |err| sim_err(py, &err))?
         }
         (Some(_), None) | (None, Some(_)) => {
             return Err(pyo3::exceptions::PyValueError::new_err(

@@ -26,10 +26,20 @@ mod orbit;
 mod simulate;
 mod spectrum;
 
-/// `n` evenly spaced values from `start` to `end`, both included exactly (the CLI's `A:B:N`).
+/// `n` evenly spaced values from `start` to `end`, both included exactly (the CLI's `A:B:N`,
+/// with its limits: finite ends, `1 <= n <= MAX_POINTS`).
 #[pyfunction]
-fn linspace(start: f64, end: f64, n: usize) -> Vec<f64> {
-    bistable_analysis::grid::linspace(start, end, n)
+fn linspace(py: Python<'_>, start: f64, end: f64, n: usize) -> PyResult<Vec<f64>> {
+    use bistable_analysis::grid::MAX_POINTS;
+    for (name, v) in [("start", start), ("end", end)] {
+        if !v.is_finite() {
+            return Err(common::invalid(py, name, v, "must be finite"));
+        }
+    }
+    if !(1..=MAX_POINTS).contains(&n) {
+        return Err(common::invalid_text("n", n, "must be in [1, 10000000]"));
+    }
+    Ok(bistable_analysis::grid::linspace(start, end, n))
 }
 
 #[pymodule]
@@ -51,6 +61,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(linspace, m)?)?;
     // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;
+    // Most values of one grid (the CLI's cap on a range's points).
+    m.add("MAX_POINTS", bistable_analysis::grid::MAX_POINTS)?;
     // The sensitivity test's default settings (one definition, in Rust).
     m.add(
         "SENSITIVITY_DEFAULTS",

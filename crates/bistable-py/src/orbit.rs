@@ -12,7 +12,7 @@ use bistable_analysis::orbit::{shoot, summarise};
 use bistable_analysis::Model;
 
 use crate::common::{
-    check_signals, invalid_text, model, sim_err, table, threads as threads_arg, Col, Stop,
+    check_signals, invalid_text, model, released, sim_err, table, threads as threads_arg, Col, Stop,
 };
 
 /// Checks an orbit period (shaker periods), as the CLI's `--period`.
@@ -53,9 +53,11 @@ pub(crate) fn orbit<'py>(
             ))
         }
         None => {
-            let st = py
-                .allow_threads(|| settled(&m, settle).map(|s| s.state()))
-                .map_err(|e| sim_err(py, &e))?;
+            let st = released(
+                py,
+                || settled(&m, settle).map(|s| s.state()),
+                |e| sim_err(py, &e),
+            )?;
             (
                 (st.x, st.v),
                 format!(
@@ -64,15 +66,17 @@ pub(crate) fn orbit<'py>(
             )
         }
     };
-    let orbit = py.allow_threads(|| shoot(&m, period, guess)).map_err(|e| {
-        pyo3::exceptions::PyRuntimeError::new_err(format!(
-            "no {period}-periodic orbit found from ({}, {}): {e}",
-            guess.0, guess.1
-        ))
-    })?;
-    let s = py
-        .allow_threads(|| summarise(&m, orbit, guess))
-        .map_err(|e| sim_err(py, &e))?;
+    let orbit = released(
+        py,
+        || shoot(&m, period, guess),
+        |e| {
+            pyo3::exceptions::PyRuntimeError::new_err(format!(
+                "no {period}-periodic orbit found from ({}, {}): {e}",
+                guess.0, guess.1
+            ))
+        },
+    )?;
+    let s = released(py, || summarise(&m, orbit, guess), |e| sim_err(py, &e))?;
     let d = PyDict::new(py);
     d.set_item("omega", omega)?;
     d.set_item("velocity", velocity)?;
@@ -90,7 +94,9 @@ pub(crate) fn orbit<'py>(
     d.set_item("multipliers", mults)?;
     d.set_item("max_abs_multiplier", s.max_abs_multiplier)?;
     d.set_item("stable", orbit.stable)?;
-    d.set_item("floquet_exponent", s.floquet_exponent)?;
+    // ln 0 = −∞ for an orbit whose largest multiplier is 0 (one that sticks): None.
+    let floquet = Some(s.floquet_exponent).filter(|f| f.is_finite());
+    d.set_item("floquet_exponent", floquet)?;
     d.set_item("impacts", orbit.impacts)?;
     d.set_item("sticks", orbit.sticks)?;
     d.set_item("snap_throughs", orbit.snap_throughs)?;
@@ -244,7 +250,7 @@ pub(crate) fn continue_omega<'py>(
             "must have at least one value",
         ));
     }
-    let threads = threads_arg(py, threads)?;
+    let threads = threads_arg(threads)?;
     let mut grids: Vec<Vec<Model>> = Vec::new();
     for &v in &velocity {
         let ms = omega
@@ -253,8 +259,9 @@ pub(crate) fn continue_omega<'py>(
             .collect::<PyResult<Vec<_>>>()?;
         grids.push(ms);
     }
-    let curves: Vec<Curves> = py
-        .allow_threads(|| {
+    let curves: Vec<Curves> = released(
+        py,
+        || {
             grids
                 .iter()
                 .map(|ms| {
@@ -263,8 +270,9 @@ pub(crate) fn continue_omega<'py>(
                     })
                 })
                 .collect::<Result<Vec<_>, Stop>>()
-        })
-        .map_err(|e| e.into_py(py))?;
+        },
+        |e| e.into_py(py),
+    )?;
 
     let out = PyDict::new(py);
     out.set_item("period", period)?;

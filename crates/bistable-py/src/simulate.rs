@@ -4,22 +4,33 @@ use std::f64::consts::TAU;
 use std::ops::ControlFlow;
 use std::time::{Instant as WallClock, SystemTime, UNIX_EPOCH};
 
-use pyo3::exceptions::PyValueError;
+use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
 use bistable_analysis::schedule::Schedule;
 use bistable_core::{
-    Checkpoint, ContactMode, Event, Observer, SimError, Simulator, State, StickCause,
+    Checkpoint, ContactMode, Event, Observer, PlateRecord, SimError, Simulator, State, StickCause,
 };
 
-use crate::common::{invalid, model, positive, sim_err, table, Col};
+use crate::common::{check_scope, invalid, model, positive, released, sim_err, table, Col, Real};
 
 /// Most trace rows one `simulate` call may return (memory: 40 bytes a row).
 const MAX_TRACE_ROWS: f64 = 1e8;
-/// Time units simulated between two checks for Python signals (Ctrl-C), with the GIL released
-/// in between (about a millisecond of work for the paper's cases).
-const CHUNK: f64 = 1000.0;
+/// Most events (impacts, sticking intervals and barrier crossings together) one `simulate` or
+/// `Simulator.advance_to` call without a callback may return (memory: up to 56 bytes each).
+const MAX_EVENTS: u64 = 10_000_000;
+/// Largest span `max(Ω, 1)·|τ − τ_origin|` from the origin of the shaker's sinusoid (as the
+/// FMU's clock range): the core keeps the shaker phase accurate below 2^52.
+const MAX_CLOCK_SPAN: f64 = 4_503_599_627_370_496.0;
+
+/// The error of a call that returned [`MAX_EVENTS`] events before its end.
+fn too_many_events(t: f64) -> PyErr {
+    PyRuntimeError::new_err(format!(
+        "more than {MAX_EVENTS} events before τ = {t}: split the run, or use \
+         Simulator.advance_to with a callback"
+    ))
+}
 fn mode_name(m: ContactMode) -> &'static str {
     match m {
         ContactMode::Free => "free",
@@ -53,6 +64,8 @@ struct Log {
     /// `t, v, to_well`.
     snaps: [Col; 3],
     open_stick: Option<(f64, f64)>,
+    /// Events logged (all kinds); the advance stops at [`MAX_EVENTS`].
+    events_n: u64,
     impacts_n: u64,
     sticks_n: u64,
     snaps_n: u64,
@@ -71,6 +84,7 @@ impl Log {
 
 impl Observer for Log {
     fn event(&mut self, event: &Event) -> ControlFlow<()> {
+        self.events_n += 1;
         match *event {
             Event::Impact(i) => {
                 self.impacts_n += 1;
@@ -102,7 +116,11 @@ impl Observer for Log {
                 self.snaps[2].i(i64::from(to.number()));
             }
         }
-        ControlFlow::Continue(())
+        if self.events_n >= MAX_EVENTS {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
     }
 }
 
@@ -214,23 +232,25 @@ pub(crate) fn simulate<'py>(
     let mut tr: [Col; 5] = Default::default();
     let started_at = epoch_s();
     let clock = WallClock::now();
-    let mut reached = 0.0;
-    while reached < t_end {
-        let until = (reached + CHUNK).min(t_end);
-        py.allow_threads(|| -> Result<(), SimError> {
-            while let Some(next) = trace.peek().filter(|&t| t <= until) {
-                sim.advance(next, &mut log)?;
+    let finished = released(
+        py,
+        || -> Result<bool, SimError> {
+            while let Some(next) = trace.peek() {
+                if !sim.advance(next, &mut log)? {
+                    return Ok(false);
+                }
                 trace.take(next);
                 let s = sim.state();
                 for (c, v) in tr.iter_mut().zip([s.t, s.x, s.v, s.z, s.zdot]) {
                     c.f(v);
                 }
             }
-            sim.advance(until, &mut log).map(|_| ())
-        })
-        .map_err(|e| sim_err(py, &e))?;
-        reached = until;
-        py.check_signals()?;
+            sim.advance(t_end, &mut log)
+        },
+        |e| sim_err(py, &e),
+    )?;
+    if !finished {
+        return Err(too_many_events(sim.time()));
     }
     let wall_time_s = clock.elapsed().as_secs_f64();
     let finished_at = epoch_s();
@@ -343,6 +363,73 @@ impl Observer for Callback<'_> {
     }
 }
 
+/// Collects the events of an advance, stopping at [`MAX_EVENTS`].
+#[derive(Default)]
+struct Events(Vec<Event>);
+
+impl Observer for Events {
+    fn event(&mut self, event: &Event) -> ControlFlow<()> {
+        self.0.push(*event);
+        if self.0.len() as u64 >= MAX_EVENTS {
+            ControlFlow::Break(())
+        } else {
+            ControlFlow::Continue(())
+        }
+    }
+}
+
+/// The shaker of a Python simulator's plate: `(Ω, V, origin τ)`; `None` for an external
+/// piece (which only a crafted checkpoint can hold).
+fn sinusoid_of(sim: &Simulator) -> Option<(f64, f64, f64)> {
+    match sim.checkpoint().plate {
+        PlateRecord::Sinusoid {
+            omega,
+            velocity,
+            origin,
+            ..
+        } => Some((omega, velocity, origin.0 + origin.1)),
+        PlateRecord::Poly { .. } => None,
+    }
+}
+
+/// Whether `t` is within the clock range of `sim`'s sinusoid ([`MAX_CLOCK_SPAN`]).
+fn in_clock_range(sim: &Simulator, t: f64) -> bool {
+    sinusoid_of(sim)
+        .is_some_and(|(omega, _, origin)| omega.max(1.0) * (t - origin).abs() < MAX_CLOCK_SPAN)
+}
+
+/// Why a restored simulator is not one a run of this package can reach, if it is not: a
+/// shaker outside the package's limits, or a time or state that is not finite or beyond the
+/// clock range (checked as the FMU checks its restored states).
+fn unreachable_state(py: Python<'_>, sim: &Simulator) -> Option<String> {
+    let Some((omega, velocity, _)) = sinusoid_of(sim) else {
+        return Some("the plate is not the shaker's sinusoid".into());
+    };
+    if let Err(e) = check_scope(py, omega, velocity, sim.params().zeta()) {
+        return Some(e.value(py).to_string());
+    }
+    let s = sim.state();
+    let values = [
+        ("t", s.t),
+        ("x", s.x),
+        ("v", s.v),
+        ("z", s.z),
+        ("zdot", s.zdot),
+        ("kinetic_energy", s.kinetic_energy()),
+        ("potential_energy", s.potential_energy()),
+    ];
+    if let Some((name, v)) = values.iter().find(|(_, v)| !v.is_finite()) {
+        return Some(format!("{name} = {v} is not finite"));
+    }
+    if !in_clock_range(sim, s.t) {
+        return Some(format!(
+            "t = {} is beyond the clock range (max(Ω, 1)·|t − origin| < 2^52)",
+            s.t
+        ));
+    }
+    None
+}
+
 /// A stateful simulator (see `bistable_impact.Simulator`).
 #[pyclass(module = "bistable_impact", name = "Simulator")]
 pub(crate) struct PySimulator {
@@ -352,24 +439,42 @@ pub(crate) struct PySimulator {
 #[pymethods]
 impl PySimulator {
     #[new]
-    #[pyo3(signature = (omega, velocity, zeta=0.02, restitution=0.85, tol=1e-16,
-        chatter="accumulation", t0=0.0, x0=0.0, v0=0.0))]
+    #[pyo3(signature = (omega, velocity, zeta=Real::new(0.02), restitution=Real::new(0.85),
+        tol=Real::new(1e-16), chatter="accumulation", t0=Real::new(0.0), x0=Real::new(0.0),
+        v0=Real::new(0.0)))]
     #[allow(clippy::too_many_arguments)]
     fn new(
         py: Python<'_>,
-        omega: f64,
-        velocity: f64,
-        zeta: f64,
-        restitution: f64,
-        tol: f64,
+        omega: Real,
+        velocity: Real,
+        zeta: Real,
+        restitution: Real,
+        tol: Real,
         chatter: &str,
-        t0: f64,
-        x0: f64,
-        v0: f64,
+        t0: Real,
+        x0: Real,
+        v0: Real,
     ) -> PyResult<Self> {
-        let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
+        let m = model(
+            py,
+            omega.get("omega")?,
+            velocity.get("velocity")?,
+            zeta.get("zeta")?,
+            restitution.get("restitution")?,
+            tol.get("tol")?,
+            chatter,
+        )?;
+        let (t0, x0, v0) = (t0.get("t0")?, x0.get("x0")?, v0.get("v0")?);
         let sim = Simulator::with_state(m.params, m.shaker.into(), m.opts, t0, x0, v0)
             .map_err(|e| sim_err(py, &e))?;
+        if !in_clock_range(&sim, t0) {
+            return Err(invalid(
+                py,
+                "t0",
+                t0,
+                "beyond the clock range: max(Ω, 1)·|t0| must be < 2^52",
+            ));
+        }
         Ok(Self { sim })
     }
 
@@ -378,26 +483,43 @@ impl PySimulator {
     fn advance_to(
         &mut self,
         py: Python<'_>,
-        t: f64,
+        t: Real,
         callback: Option<Py<PyAny>>,
     ) -> PyResult<PyObject> {
+        let t = t.get("t")?;
+        if !t.is_finite() {
+            return Err(invalid(py, "t", t, "must be finite"));
+        }
+        if !in_clock_range(&self.sim, t) {
+            let rule = "beyond the clock range: max(Ω, 1)·|t − origin| must be < 2^52";
+            return Err(invalid(py, "t", t, rule));
+        }
+        if let Some(f) = &callback {
+            if !f.bind(py).is_callable() {
+                return Err(pyo3::exceptions::PyTypeError::new_err(format!(
+                    "'callback' must be callable, not {}",
+                    f.bind(py).get_type().name()?
+                )));
+            }
+        }
         let sim = &mut self.sim;
         match callback {
             Some(f) => {
                 let mut cb = Callback { f: &f, error: None };
-                let r = py.allow_threads(|| sim.advance(t, &mut cb));
+                let r = released(py, || sim.advance(t, &mut cb), |e| sim_err(py, &e));
                 if let Some(e) = cb.error {
                     return Err(e);
                 }
-                let reached = r.map_err(|e| sim_err(py, &e))?;
-                Ok(reached.into_pyobject(py)?.to_owned().into_any().unbind())
+                Ok(r?.into_pyobject(py)?.to_owned().into_any().unbind())
             }
             None => {
-                let events = py
-                    .allow_threads(|| sim.events_until(t))
-                    .map_err(|e| sim_err(py, &e))?;
+                let mut events = Events::default();
+                let reached = released(py, || sim.advance(t, &mut events), |e| sim_err(py, &e))?;
+                if !reached {
+                    return Err(too_many_events(sim.time()));
+                }
                 let out = PyList::empty(py);
-                for e in &events {
+                for e in &events.0 {
                     out.append(event_dict(py, e)?)?;
                 }
                 Ok(out.into_any().unbind())
@@ -428,7 +550,12 @@ impl PySimulator {
     }
 
     /// Switches to a sinusoidal shaker `(omega, velocity)` now, continuing the plate.
-    fn set_sinusoid(&mut self, py: Python<'_>, omega: f64, velocity: f64) -> PyResult<()> {
+    fn set_sinusoid(&mut self, py: Python<'_>, omega: Real, velocity: Real) -> PyResult<()> {
+        let (omega, velocity) = (omega.get("omega")?, velocity.get("velocity")?);
+        bistable_core::Sinusoid::new(omega, velocity)
+            .map_err(|e| crate::common::param_err(py, &e))?;
+        check_scope(py, omega, velocity, self.sim.params().zeta())?;
+        // The new sinusoid's origin is now: the clock range starts again from here.
         self.sim
             .set_sinusoid(omega, velocity)
             .map_err(|e| sim_err(py, &e))
@@ -442,11 +569,16 @@ impl PySimulator {
     /// A simulator that continues exactly as the one `data` was taken from.
     #[staticmethod]
     fn from_checkpoint(py: Python<'_>, data: &[u8]) -> PyResult<Self> {
-        let c = Checkpoint::from_bytes(data).map_err(PyValueError::new_err)?;
+        let refused =
+            |why: String| PyValueError::new_err(format!("invalid checkpoint 'data': {why}"));
+        let c = Checkpoint::from_bytes(data).map_err(refused)?;
         let sim = Simulator::from_checkpoint(&c).map_err(|e| match e {
-            SimError::Param(p) => PyValueError::new_err(format!("invalid checkpoint: {p}")),
+            SimError::Param(p) => refused(p.to_string()),
             other => sim_err(py, &other),
         })?;
+        if let Some(why) = unreachable_state(py, &sim) {
+            return Err(refused(format!("not a state a run can reach: {why}")));
+        }
         Ok(Self { sim })
     }
 

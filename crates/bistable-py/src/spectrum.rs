@@ -8,7 +8,7 @@ use pyo3::types::PyDict;
 
 use bistable_analysis::spectrum::{flatness, Spectrum, SpectrumOptions};
 
-use crate::common::{invalid, invalid_text, model, sim_err, table, Col};
+use crate::common::{invalid, invalid_text, model, released, sim_err, table, Col};
 
 /// The spectrum at one point (see `bistable_impact.spectrum`).
 #[pyfunction]
@@ -52,9 +52,7 @@ pub(crate) fn spectrum<'py>(
         record: rec,
         samples: spp,
     };
-    let s = py
-        .allow_threads(|| Spectrum::compute(&m, o))
-        .map_err(|e| sim_err(py, &e))?;
+    let s = released(py, || Spectrum::compute(&m, o), |e| sim_err(py, &e))?;
     let flat = flatness(&s.bins, max_f);
     let out = PyDict::new(py);
     out.set_item("omega", m.omega())?;

@@ -14,9 +14,14 @@ threads or a ``dask.distributed`` client); :func:`orbit`, :func:`continue_omega`
 return the subcommands' JSON keys as dicts and their CSV files as pandas DataFrames;
 :func:`linspace` gives the values of the CLI's ``A:B:N`` ranges.
 
-Bad arguments raise ``ValueError`` (or ``TypeError`` for a wrong type) naming the argument, with
-the CLI's rule text; a failed simulation raises ``RuntimeError``. Computations release the GIL;
-Ctrl-C stops the sweeps, the continuation and the bifurcation data between points.
+Every argument is checked before any work: a bad value raises ``ValueError`` (a wrong type
+``TypeError``) naming the argument, with the CLI's rule text; a failed simulation raises
+``RuntimeError``. Beyond the CLI's rules the package keeps the model in the FMU's ranges
+(``Ω`` in ``[1e-6, 1e6]``, ``V`` in ``[0, 1e6]``, ``ζ`` in ``[0, 10]``) and caps work sizes
+(grids 1e7 points as the CLI, transients 1e6 shaker periods, ...; the README's Python section
+lists them). Computations release the GIL; Ctrl-C raises ``KeyboardInterrupt`` within about
+20 ms, also inside the runs of the sweeps, the continuation and the bifurcation data on their
+worker threads.
 """
 
 from __future__ import annotations
@@ -25,6 +30,7 @@ from typing import Any, Dict, Optional
 
 import numpy as np
 
+from . import _check as check
 from . import _native
 from ._native import Simulator
 from ._table import Table
@@ -111,28 +117,34 @@ def simulate(
     the plate ``z = (V/Ω)·sin(Ωτ)`` meets it moving up: impact 0 at ``τ = 0``).
 
     Args:
-        omega: shaker frequency ratio ``Ω = Ω̂/ω0`` (> 0).
-        velocity: shaker velocity amplitude ``V = V̂/(ω0·Δx)`` (>= 0).
+        omega: shaker frequency ratio ``Ω = Ω̂/ω0``, ``[1e-6, 1e6]``.
+        velocity: shaker velocity amplitude ``V = V̂/(ω0·Δx)``, ``[0, 1e6]``.
         t_end: end time ``τ`` (time units, > 0); exactly one of ``t_end`` and ``periods``.
         periods: number of natural periods ``N``, i.e. up to ``τ = 2π·N``.
-        zeta: damping ratio ``ζ`` (>= 0).
+        zeta: damping ratio ``ζ``, ``[0, 10]``.
         restitution: coefficient of restitution ``e`` in ``[0, 1]``.
         tol: local error tolerance of the Taylor integrator, in ``[1e-18, 1e-3]``.
         chatter: ``'accumulation'`` (predicted accumulation point, default) or ``'paper'``
             (sticking when two impacts are less than ``1e-9`` apart).
-        trace_dt: sampling interval of :attr:`SimulationResult.trace` (time units, > 0).
+        trace_dt: sampling interval of :attr:`SimulationResult.trace` (time units, > 0; at
+            most 1e8 rows).
+
+    At most 1e7 events (impacts, sticking intervals, barrier crossings) are returned: a run
+    with more raises ``RuntimeError`` (use :class:`Simulator` with a callback). Ctrl-C raises
+    ``KeyboardInterrupt``.
     """
+    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
     return SimulationResult(
         _native.simulate(
-            omega,
-            velocity,
-            t_end=t_end,
-            periods=periods,
-            zeta=zeta,
-            restitution=restitution,
-            tol=tol,
-            chatter=chatter,
-            trace_dt=trace_dt,
+            m["omega"],
+            m["velocity"],
+            t_end=check.optional_real("t_end", t_end),
+            periods=check.optional_real("periods", periods),
+            zeta=m["zeta"],
+            restitution=m["restitution"],
+            tol=m["tol"],
+            chatter=check.text("chatter", chatter),
+            trace_dt=check.optional_real("trace_dt", trace_dt),
         )
     )
 
@@ -181,7 +193,7 @@ def classify(
         full: always run ``max_periods`` (no early stop).
         max_period: largest period looked for, in shaker periods, ``[1, 64]``.
         period_tol: relative agreement that counts as periodic, ``(0, 1e-3]``.
-        lyapunov_periods: shaker periods averaged for the Lyapunov exponent (>= 1).
+        lyapunov_periods: shaker periods averaged for the Lyapunov exponent, ``[1, 1e6]``.
         repeats: perturbed repeats of a suspect run, ``[0, 64]`` (0: no test).
         efoldings: transient growth (natural log of the amplification) from which a decided
             run is suspect, ``(0, 700]``.
@@ -194,25 +206,26 @@ def classify(
 
     The defaults are those of ``bistable classify`` (:data:`SENSITIVITY_DEFAULTS`).
     """
-    return _native.classify(
-        omega,
-        velocity,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
-        max_periods=max_periods,
-        full=full,
-        max_period=max_period,
-        period_tol=period_tol,
-        lyapunov_periods=lyapunov_periods,
-        repeats=repeats,
-        efoldings=efoldings,
-        perturbation=perturbation,
-        horizon=horizon,
-        repeat_periods=repeat_periods,
-        lyapunov_windows=lyapunov_windows,
+    options = check.classify_options(
+        dict(
+            zeta=zeta,
+            restitution=restitution,
+            tol=tol,
+            chatter=chatter,
+            max_periods=max_periods,
+            full=full,
+            max_period=max_period,
+            period_tol=period_tol,
+            lyapunov_periods=lyapunov_periods,
+            repeats=repeats,
+            efoldings=efoldings,
+            perturbation=perturbation,
+            horizon=horizon,
+            repeat_periods=repeat_periods,
+            lyapunov_windows=lyapunov_windows,
+        )
     )
+    return _native.classify(check.real("omega", omega), check.real("velocity", velocity), **options)
 
 
 def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict[str, Any]:
@@ -224,13 +237,18 @@ def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict
         restitution: ``e`` in ``[0, 1)``.
         omega: ``Ω`` (> 0), for the quasi-static threshold.
     """
-    return _native.thresholds_of(restitution, omega)
+    return _native.thresholds_of(
+        check.real("restitution", restitution), check.optional_real("omega", omega)
+    )
 
 
 def linspace(start: float, end: float, n: int) -> np.ndarray:
     """``n`` evenly spaced values from ``start`` to ``end``, both included exactly: the values
-    of the CLI's ``A:B:N`` ranges (one formula, ``bistable_analysis::grid``)."""
-    return np.array(_native.linspace(start, end, n), dtype=float)
+    of the CLI's ``A:B:N`` ranges (one formula, ``bistable_analysis::grid``), with its limits:
+    finite ends, ``n`` in ``[1, 1e7]``."""
+    n = check.integer("n", n, 1, check.MAX_POINTS)
+    values = _native.linspace(check.real("start", start), check.real("end", end), n)
+    return np.array(values, dtype=float)
 
 
 from . import sweep  # noqa: E402  (uses the functions above)

@@ -7,6 +7,8 @@ Event = Dict[str, Any]
 
 #: Keys of the classify record, in order: the map CSV's columns.
 COLUMNS: List[str]
+#: Most values of one grid and points of one map (the CLI's cap on ranges, 1e7).
+MAX_POINTS: int
 #: Default settings of the sensitivity test (``None`` arguments of classify/classify_many).
 SENSITIVITY_DEFAULTS: Dict[str, Union[int, float]]
 
@@ -58,6 +60,7 @@ def classify_many(
     repeat_periods: Optional[float] = None,
     lyapunov_windows: Optional[int] = None,
     threads: int = 0,
+    lanes: int = 4,
     progress: Optional[Callable[[int, int], Any]] = None,
     on_record: Optional[Callable[[Dict[str, Any]], Any]] = None,
 ) -> List[Dict[str, Any]]: ...
@@ -136,6 +139,11 @@ class Simulator:
     chatter='accumulation', t0=0.0, x0=0.0, v0=0.0)``: the mass at ``x0`` (``Δx``, not below
     the plate) with velocity ``v0`` (``ω0·Δx``) at time ``t0``; the defaults are the paper's
     initial condition. Picklable (through :meth:`checkpoint`).
+
+    Limits (``ValueError`` naming the argument beyond them, ``TypeError`` for what is not a
+    real number): ``omega`` in ``[1e-6, 1e6]``, ``velocity`` in ``[0, 1e6]``, ``zeta`` in
+    ``[0, 10]``; times within the clock range ``max(Ω, 1)·|t − origin| < 2^52`` (the origin
+    of the shaker's sinusoid: 0, or the time of the last :meth:`set_sinusoid`).
     """
 
     def __init__(
@@ -159,7 +167,12 @@ class Simulator:
         ``'stick_end'`` with ``t, x, v``; ``'snap_through'`` with ``t, v, to_well``). With
         ``callback``: calls it with each event in time order (the GIL is taken for the call
         only); returning ``False`` stops the advance at that event, an exception stops it and
-        propagates; returns whether ``t`` was reached."""
+        propagates; returns whether ``t`` was reached.
+
+        ``t`` must be finite and within the clock range. Ctrl-C raises ``KeyboardInterrupt``
+        within about 20 ms (the simulator stays usable where it stopped). Without
+        ``callback`` at most 1e7 events are returned: beyond, ``RuntimeError`` (the simulator
+        stays at the last event)."""
         ...
     def state(self) -> Dict[str, Any]:
         """``t, x, v, z, zdot, mode ('free'|'sticking'), well (1|2), kinetic_energy,
@@ -182,7 +195,10 @@ class Simulator:
         ...
     @staticmethod
     def from_checkpoint(data: bytes) -> "Simulator":
-        """Restores a simulator; ``ValueError`` for bytes that are not a valid checkpoint."""
+        """Restores a simulator; ``ValueError`` naming ``'data'`` for bytes that are not a
+        valid checkpoint, and for a checkpoint whose state no run can reach (a time, position,
+        velocity or energy that is not finite, a time beyond the clock range, parameters
+        outside the limits of :class:`Simulator`)."""
         ...
     def __reduce__(self) -> Tuple[Any, Tuple[bytes]]: ...
 
@@ -198,6 +214,7 @@ def basin_cells(
     max_periods: float = 2000.0,
     lyapunov_periods: int = 300,
     threads: int = 0,
+    lanes: int = 4,
     check_only: bool = False,
 ) -> List[Dict[str, Any]]: ...
 

@@ -13,6 +13,7 @@ from typing import Any, Dict, Optional, Sequence, Tuple, Union
 
 import numpy as np
 
+from . import _check as check
 from . import _native
 from ._table import Table
 
@@ -68,28 +69,24 @@ def orbit(
         period: period of the orbit in shaker periods, ``[1, 64]``.
         guess: ``(x, x')`` at plate phase 0 to start Newton from; default: the section point
             after ``settle`` shaker periods from the paper's initial condition.
-        settle: shaker periods simulated for the default guess.
+        settle: shaker periods simulated for the default guess, ``[0, 1e6]``.
         zeta, restitution, tol, chatter: the model and solver, as for
             :func:`bistable_impact.simulate`.
+
+    ``floquet_exponent`` is None when the largest multiplier is 0 (an orbit that sticks).
+    Ctrl-C raises ``KeyboardInterrupt``.
 
     Raises:
         ValueError: a bad argument (named). RuntimeError: Newton failed (``no P-periodic orbit
         found from (x, v): ...``) or the simulation failed.
     """
-    if guess is not None:
-        if isinstance(guess, (str, bytes)) or len(guess) != 2:
-            raise ValueError(f"invalid value {guess!r} for 'guess': must be two finite numbers")
-        guess = (guess[0], guess[1])
+    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
     d = _native.orbit(
-        omega,
-        velocity,
-        period=period,
-        guess=guess,
-        settle=settle,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
+        period=check.integer("period", period, 1, 64),
+        guess=None if guess is None else check.pair("guess", guess),
+        settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
+        chatter=check.text("chatter", chatter),
+        **m,
     )
     d["monodromy"] = np.asarray(d["monodromy"], dtype=float)
     return d
@@ -123,23 +120,24 @@ def continue_omega(
         omega: the grid of ``Ω`` (> 0), evenly spaced (e.g. :func:`bistable_impact.linspace`).
         velocity: one ``V`` or several.
         period: ``[1, 64]`` shaker periods.
-        settle: shaker periods simulated at every ``Ω`` for the seeds.
+        settle: shaker periods simulated at every ``Ω`` for the seeds, ``[0, 1e6]``.
         method: ``'natural'`` or ``'arclength'``.
-        threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
+        threads: worker threads, ``[0, 1024]`` (0: all cores); the GIL is released, Ctrl-C
+            stops the run. ``len(omega)·len(velocity) <= 1e7``.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
-    vs = [float(velocity)] if np.ndim(velocity) == 0 else [float(v) for v in velocity]
+    ws, vs = check.reals("omega", omega), check.reals("velocity", velocity)
+    check.grid(("omega", "velocity"), ws, vs)
+    m = check.model(dict(zeta=zeta, restitution=restitution, tol=tol))
     d = _native.continue_omega(
-        [float(w) for w in np.atleast_1d(omega)],
+        ws,
         vs,
-        period=period,
-        settle=settle,
+        period=check.integer("period", period, 1, 64),
+        settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
         method=method,
-        threads=threads,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
+        threads=check.threads(threads),
+        chatter=check.text("chatter", chatter),
+        **m,
     )
     d["orbits"] = _orbits_frame(d)
     return d
@@ -180,29 +178,35 @@ def bifurcation(
 
     Args:
         param: ``'omega'`` or ``'velocity'``.
-        values: the values of the control parameter (``Ω > 0`` or ``V >= 0``).
-        omega, velocity: the fixed parameter.
-        transient, record: shaker periods skipped and recorded (``record >= 1``,
+        values: the values of the control parameter (``Ω`` in ``[1e-6, 1e6]`` or ``V`` in
+            ``[0, 1e6]``; at most 1e7 values).
+        omega, velocity: the fixed parameter (the other one, if given, must be a valid value).
+        transient, record: shaker periods skipped (``[0, 1e6]``) and recorded (``record >= 1``,
             ``record·len(values) <= 1e8``).
-        samples: dense-output samples per shaker period for the maxima (>= 8).
-        branch_periods: periods of the orbit branches (each ``[1, 64]``); empty: none.
-        threads: worker threads (0: all cores); the GIL is released, Ctrl-C stops the run.
+        samples: dense-output samples per shaker period for the maxima, ``[8, 4096]``.
+        branch_periods: periods of the orbit branches (each ``[1, 64]``, at most 64 of them);
+            empty: none.
+        threads: worker threads, ``[0, 1024]`` (0: all cores); the GIL is released, Ctrl-C
+            stops the run.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
+    if isinstance(branch_periods, (str, bytes)) or not hasattr(branch_periods, "__len__"):
+        raise TypeError("'branch_periods' must be a sequence of integers")
+    if len(branch_periods) > check.MAX_BRANCHES:
+        raise check.invalid("branch_periods", f"<{len(branch_periods)} values>", "at most 64 periods")
+    m = check.model(dict(zeta=zeta, restitution=restitution, tol=tol))
     d = _native.bifurcation(
         param,
-        [float(x) for x in np.atleast_1d(values)],
-        omega=omega,
-        velocity=velocity,
-        transient=transient,
-        record=record,
-        samples=samples,
-        branch_periods=[int(p) for p in branch_periods],
-        threads=threads,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
+        check.reals("values", values),
+        omega=check.optional_real("omega", omega),
+        velocity=check.optional_real("velocity", velocity),
+        transient=check.integer("transient", transient, 0, check.MAX_TRANSIENT),
+        record=check.integer("record", record, 1, 100_000_000),
+        samples=check.integer("samples", samples, 8, check.MAX_CYCLE_SAMPLES),
+        branch_periods=[check.integer("branch_periods", p, 1, 64) for p in branch_periods],
+        threads=check.threads(threads),
+        chatter=check.text("chatter", chatter),
+        **m,
     )
     data = Table(d.pop("data")).to_pandas()
     data["kind"] = _KINDS[data["kind"].to_numpy()]
@@ -239,21 +243,23 @@ def energy_map(
             ``u = −(1+e)/(1−e)·cos φ`` at ``φ = 0`` (with impacts: below the lowest one).
         nx, ny: cells along the phase and along ``u`` (the CLI draws 360 × 300;
             ``nx·ny <= 1e7``).
-        omega, velocity: the overlaid run (``Ω > 0``, ``V > 0``; both or neither).
-        periods: natural periods of the overlaid run (> 0).
-        zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`.
+        omega, velocity: the overlaid run (``Ω`` in ``[1e-6, 1e6]``, ``V`` in ``(0, 1e6]``;
+            both or neither).
+        periods: natural periods of the overlaid run (> 0, ``periods·max(omega, 1) <= 1e7``).
+        zeta, tol, chatter: the overlaid run's model, as for :func:`bistable_impact.simulate`
+            (checked also without the overlay).
     """
     d = _native.energy_map(
-        restitution,
-        u_range=u_range,
-        nx=nx,
-        ny=ny,
-        omega=omega,
-        velocity=velocity,
-        periods=periods,
-        zeta=zeta,
-        tol=tol,
-        chatter=chatter,
+        check.real("restitution", restitution),
+        u_range=None if u_range is None else check.pair("u_range", u_range),
+        nx=check.integer("nx", nx, 1, check.MAX_POINTS),
+        ny=check.integer("ny", ny, 1, check.MAX_POINTS),
+        omega=check.optional_real("omega", omega),
+        velocity=check.optional_real("velocity", velocity),
+        periods=check.real("periods", periods),
+        zeta=check.real("zeta", zeta),
+        tol=check.real("tol", tol),
+        chatter=check.text("chatter", chatter),
     )
     d["phase"] = Table(d["phase"])["phase"]
     d["u"] = Table(d["u"])["u"]
@@ -288,23 +294,20 @@ def spectrum(
 
     Args:
         omega, velocity: the shaker.
-        transient: shaker periods skipped.
+        transient: shaker periods skipped, ``[0, 1e6]``.
         record: shaker periods sampled (>= 8; resolution ``Ω/record``).
         samples: samples per shaker period (>= 4; ``record·samples <= 2^26``).
         max_freq: highest frequency (units of ``Ω``, > 0) of the flatness.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
+    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
     d = _native.spectrum(
-        omega,
-        velocity,
-        transient=transient,
-        record=record,
-        samples=samples,
-        max_freq=max_freq,
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
+        transient=check.integer("transient", transient, 0, check.MAX_TRANSIENT),
+        record=check.integer("record", record, 8, 1 << 26),
+        samples=check.integer("samples", samples, 4, 1 << 26),
+        max_freq=check.real("max_freq", max_freq),
+        chatter=check.text("chatter", chatter),
+        **m,
     )
     d["spectrum"] = Table(d["spectrum"]).to_pandas()
     return d

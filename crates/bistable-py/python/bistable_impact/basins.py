@@ -5,8 +5,7 @@ from __future__ import annotations
 
 from typing import Any, Sequence
 
-import numpy as np
-
+from . import _check as check
 from . import _native
 
 #: Columns of the cells' DataFrame (``bistable basins`` CSV columns without the model's).
@@ -49,6 +48,31 @@ def _classify_starts(omega, velocity, phase, starts, options, client, chunk, thr
     return [c for part in client.gather(futures) for c in part]
 
 
+def _arguments(
+    omega, velocity, phase, client, chunk, threads, lanes, zeta, restitution, tol, chatter,
+    max_periods, lyapunov_periods,
+):  # fmt: skip
+    """The arguments :func:`basins` and :func:`basin_uncertainty` share, converted:
+    ``(omega, velocity, phase)``, the classification options and ``(client, chunk, threads)``
+    (their values are checked by the native module before any work)."""
+    shaker = tuple(check.real(k, v) for k, v in (("omega", omega), ("velocity", velocity), ("phase", phase)))
+    options = dict(
+        zeta=check.real("zeta", zeta),
+        restitution=check.real("restitution", restitution),
+        tol=check.real("tol", tol),
+        chatter=check.text("chatter", chatter),
+        max_periods=check.real("max_periods", max_periods),
+        lyapunov_periods=check.integer("lyapunov_periods", lyapunov_periods, 1, check.MAX_LYAPUNOV_PERIODS),
+        lanes=check.lanes(lanes),
+    )
+    where = (
+        check.client(client),
+        check.integer("chunk", chunk, 1, check.MAX_POINTS),
+        check.threads(threads),
+    )
+    return shaker, options, where
+
+
 def basins(
     omega: float,
     velocity: float,
@@ -58,6 +82,7 @@ def basins(
     client: Any = None,
     chunk: int = 64,
     threads: int = 0,
+    lanes: int = 4,
     zeta: float = 0.02,
     restitution: float = 0.85,
     tol: float = 1e-16,
@@ -76,27 +101,24 @@ def basins(
     :func:`basin_uncertainty` measures the uncertainty exponent of the result.
 
     Args:
-        x0, v0: the grid's start positions (not below the plate at ``phase``) and velocities.
+        x0, v0: the grid's start positions (not below the plate at ``phase``) and velocities
+            (at most 1e7 starts in all).
         client: a ``dask.distributed`` Client: the starts go to its workers in tasks of
             ``chunk`` starts (each on one thread); without it, ``threads`` Rust threads here.
+        lanes: trajectories each thread (or Dask task) advances together in SIMD lanes: 1, 4
+            or 8 (the cells are the same for every width).
         Other arguments: as for ``bistable basins``.
     """
     import pandas as pd
 
-    if not (isinstance(chunk, int) and chunk >= 1):
-        raise ValueError(f"invalid value {chunk!r} for 'chunk': must be an integer >= 1")
-    options = dict(
-        zeta=zeta,
-        restitution=restitution,
-        tol=tol,
-        chatter=chatter,
-        max_periods=max_periods,
-        lyapunov_periods=lyapunov_periods,
-    )
-    xs = np.atleast_1d(np.asarray(x0, dtype=float))
-    vs = np.atleast_1d(np.asarray(v0, dtype=float))
-    starts = [(float(a), float(b)) for b in vs for a in xs]
-    cells = _classify_starts(omega, velocity, phase, starts, options, client, chunk, threads)
+    shaker, options, where = _arguments(
+        omega, velocity, phase, client, chunk, threads, lanes, zeta, restitution, tol, chatter,
+        max_periods, lyapunov_periods,
+    )  # fmt: skip
+    xs, vs = check.reals("x0", x0), check.reals("v0", v0)
+    check.grid(("x0", "v0"), xs, vs)
+    starts = [(a, b) for b in vs for a in xs]
+    cells = _classify_starts(*shaker, starts, options, *where)
     attractors, index = _native.basin_attractors(cells)
     df = pd.DataFrame.from_records(cells, columns=list(CELL_COLUMNS))
     df["attractor"] = index
@@ -115,6 +137,7 @@ def basin_uncertainty(
     client: Any = None,
     chunk: int = 64,
     threads: int = 0,
+    lanes: int = 4,
     zeta: float = 0.02,
     restitution: float = 0.85,
     tol: float = 1e-16,
@@ -132,9 +155,9 @@ def basin_uncertainty(
     Args:
         omega, velocity, phase, x0: as given to :func:`basins` for ``cells``.
         cells: the cells DataFrame that :func:`basins` returned for the grid ``x0 × v0``.
-        samples: cells sampled (>= 0; at most all of them).
-        client, chunk, threads: where the displaced starts are classified, as in
-            :func:`basins`.
+        samples: cells sampled, ``[0, 1e7]`` (at most all of them).
+        client, chunk, threads, lanes: where and how the displaced starts are classified,
+            as in :func:`basins`.
         Other arguments: the model and classification options given to :func:`basins`.
 
     Returns ``(fractions, alpha)``: a pandas DataFrame with ``epsilon, samples, uncertain,
@@ -144,22 +167,28 @@ def basin_uncertainty(
     """
     import pandas as pd
 
-    if not (isinstance(samples, int) and samples >= 0):
-        raise ValueError(f"invalid value {samples!r} for 'samples': must be an integer >= 0")
-    if not (isinstance(chunk, int) and chunk >= 1):
-        raise ValueError(f"invalid value {chunk!r} for 'chunk': must be an integer >= 1")
-    xs = np.atleast_1d(np.asarray(x0, dtype=float))
-    model = dict(zeta=zeta, restitution=restitution, tol=tol, chatter=chatter)
-    options = dict(model, max_periods=max_periods, lyapunov_periods=lyapunov_periods)
+    shaker, options, where = _arguments(
+        omega, velocity, phase, client, chunk, threads, lanes, zeta, restitution, tol, chatter,
+        max_periods, lyapunov_periods,
+    )  # fmt: skip
+    samples = check.integer("samples", samples, 0, check.MAX_POINTS)
+    xs = check.reals("x0", x0)
+    if not (hasattr(cells, "columns") and set(CELL_COLUMNS) <= set(cells.columns)):
+        raise check.invalid(
+            "cells",
+            type(cells).__name__,
+            f"must be the cells DataFrame of basins() (columns {', '.join(CELL_COLUMNS)})",
+        )
+    model = {k: options[k] for k in ("zeta", "restitution", "tol", "chatter")}
     records = [
         {k: (None if pd.isna(v) else v.item() if hasattr(v, "item") else v) for k, v in r.items()}
         for r in cells[list(CELL_COLUMNS)].to_dict("records")
     ]
     grid = dict(
         model,
-        omega=omega,
-        velocity=velocity,
-        phase=phase,
+        omega=shaker[0],
+        velocity=shaker[1],
+        phase=shaker[2],
         cells=records,
         samples=samples,
         x_first=float(xs[0]),
@@ -167,7 +196,7 @@ def basin_uncertainty(
         nx=len(xs),
     )
     starts = _native.basin_uncertainty_starts(grid)
-    reached = _classify_starts(omega, velocity, phase, starts, options, client, chunk, threads)
+    reached = _classify_starts(*shaker, starts, options, *where)
     fractions, alpha = _native.basin_uncertainty(grid, reached)
     columns = ["epsilon", "samples", "uncertain", "fraction"]
     return pd.DataFrame.from_records(fractions, columns=columns), alpha

@@ -6,8 +6,8 @@ import os
 import sys
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
 
-import numpy as np
 
+from . import _check as check
 from . import _native
 
 #: Columns of the map (the CLI map CSV's header, in order; defined once, in
@@ -75,6 +75,7 @@ def map(
     store: Optional[str] = None,
     chunk: int = 16,
     threads: int = 0,
+    lanes: int = 4,
     progress: Union[bool, Progress] = False,
     zeta: float = 0.02,
     restitution: float = 0.85,
@@ -98,12 +99,13 @@ def map(
     the CLI's grid. ``lyapunov_periods`` defaults to 300 as in ``bistable map``.
 
     Args:
-        omega, velocity: the grid's values of ``Ω`` (> 0) and ``V`` (>= 0).
+        omega, velocity: the grid's values of ``Ω`` and ``V`` (as for
+            :func:`bistable_impact.classify`; at most 1e7 points in all).
         client: a ``dask.distributed`` Client: the points go to its workers in tasks of
             ``chunk`` points (each on one thread); tasks lost with a worker are run again by
             Dask, and each point's result is taken once. Without a client, ``threads`` Rust
-            threads in this process (0: all cores), with the GIL released; Ctrl-C
-            (``KeyboardInterrupt``) stops the sweep after the points in progress.
+            threads in this process (``[0, 1024]``, 0: all cores), with the GIL released;
+            Ctrl-C (``KeyboardInterrupt``) stops the sweep, also the points in progress.
         store: a CSV file (the map CSV's columns) that keeps results: points already in it
             (same ``zeta`` and ``restitution``; the other options are not recorded in the
             file: resume with the same ones) are not computed again; finished points are
@@ -111,19 +113,24 @@ def map(
             without one every 64 points and when the sweep stops, also by Ctrl-C or an
             error), so a crashed or interrupted sweep resumes with only the missing points;
             at the end it is rewritten with the whole grid.
-        chunk: points per Dask task (>= 1).
+        chunk: points per Dask task, ``[1, 1e7]``.
+        lanes: trajectories each thread (or Dask task) advances together in SIMD lanes: 1
+            (one at a time), 4 or 8. The results are the same for every width; 4 is the
+            fastest on the machines measured (``docs/benchmarks.md``).
         progress: ``True`` for a progress line on stderr, or a callable ``f(done, total)``
             (points) called after each point (no client) or each finished task (client).
         Other arguments: as for :func:`bistable_impact.classify`.
     """
     import pandas as pd
 
-    if not (isinstance(chunk, int) and chunk >= 1):
-        raise ValueError(f"invalid value {chunk!r} for 'chunk': must be an integer >= 1")
+    chunk = check.integer("chunk", chunk, 1, check.MAX_POINTS)
+    threads = check.threads(threads)
+    client = check.client(client)
+    store = check.path("store", store)
     report: Optional[Progress] = _text_progress if progress is True else (progress or None)
     if report is not None and not callable(report):
         raise TypeError(f"'progress' must be a bool or a callable, not {type(progress).__name__}")
-    options = dict(
+    options = check.classify_options(dict(
         zeta=zeta,
         restitution=restitution,
         tol=tol,
@@ -139,10 +146,11 @@ def map(
         horizon=horizon,
         repeat_periods=repeat_periods,
         lyapunov_windows=lyapunov_windows,
-    )
-    w = np.atleast_1d(np.asarray(omega, dtype=float))
-    v = np.atleast_1d(np.asarray(velocity, dtype=float))
-    points = [(float(a), float(b)) for b in v for a in w]
+    ))
+    options["lanes"] = check.lanes(lanes)
+    w, v = check.reals("omega", omega), check.reals("velocity", velocity)
+    check.grid(("omega", "velocity"), w, v)
+    points = [(a, b) for b in v for a in w]
     _native.classify_many([], **options)  # checks the options before any work is sent
     kept = _Store(store, zeta, restitution) if store is not None else None
     done: Dict[Point, Dict[str, Any]] = dict(kept.done) if kept else {}
