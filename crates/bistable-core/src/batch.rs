@@ -245,8 +245,8 @@ impl Batch {
                 let slot = self.slots[lane].as_mut().expect("occupied");
                 let out = self.kernel.verdict(lane);
                 let kernel = &self.kernel;
-                let taken = slot.sim.take_lane_step(st.leaving, out, |series, var| {
-                    kernel.copy_lane(lane, consts.order, series, var)
+                let taken = slot.sim.take_lane_step(st.leaving, out, |series, var, b| {
+                    kernel.copy_lane(lane, consts.order, series, var, b)
                 });
                 match taken {
                     Ok(()) => {
@@ -375,14 +375,7 @@ impl<T: Lane> Soa<T> {
 
     fn verdict(&self, i: usize) -> LaneEnd {
         let o = &self.out;
-        let mut bernstein = [0.0; BUF];
-        if !T::test_lane(o.clear, i) {
-            for (b, v) in bernstein.iter_mut().zip(&self.bern) {
-                *b = v.lane(i);
-            }
-        }
         LaneEnd {
-            bernstein,
             finite: T::test_lane(o.finite, i),
             h: o.h.lane(i),
             clear: T::test_lane(o.clear, i),
@@ -391,14 +384,21 @@ impl<T: Lane> Soa<T> {
         }
     }
 
-    /// Copies lane `i`'s series (coefficients `0..=order + 1`) into a lone simulator's.
+    /// Copies lane `i`'s series (coefficients `0..=order + 1`) into a lone simulator's, and
+    /// its gap's Bernstein coefficients into `bernstein` when given.
     fn copy_lane(
         &self,
         i: usize,
         order: usize,
         series: &mut FlightSeries,
         var: Option<&mut VariationSeries>,
+        bernstein: Option<&mut [f64; BUF]>,
     ) {
+        if let Some(b) = bernstein {
+            for (b, v) in b.iter_mut().zip(&self.bern).take(order + 2) {
+                *b = v.lane(i);
+            }
+        }
         for k in 0..=order + 1 {
             series.x[k] = self.series.x[k].lane(i);
             series.u[k] = self.series.u[k].lane(i);
@@ -450,11 +450,12 @@ impl Kernel {
         order: usize,
         series: &mut FlightSeries,
         var: Option<&mut VariationSeries>,
+        bernstein: Option<&mut [f64; BUF]>,
     ) {
         match self {
             Kernel::Scalar => {}
-            Kernel::X4(s) => s.copy_lane(i, order, series, var),
-            Kernel::X8(s) => s.copy_lane(i, order, series, var),
+            Kernel::X4(s) => s.copy_lane(i, order, series, var, bernstein),
+            Kernel::X8(s) => s.copy_lane(i, order, series, var, bernstein),
         }
     }
 }

@@ -262,9 +262,6 @@ pub(crate) struct LaneEnd {
     pub far: bool,
     /// Gap and gap rate at `h`.
     pub end_gap: (f64, f64),
-    /// Bernstein coefficients of the gap over `[0, h]` (orders `0..=order + 1`; valid where
-    /// the step does not leave the plate).
-    pub bernstein: [f64; BUF],
 }
 
 #[derive(Clone)]
@@ -1048,15 +1045,16 @@ impl Simulator {
     }
 
     /// Takes a free step that a batch computed from [`Simulator::lane_start`]: `fill` writes the
-    /// series of `x`, of the gap and (with variational equations) of their columns, and `out`
-    /// is the kernel's verdict. The step is the one [`Simulator::compute_step`] would compute
+    /// series of `x`, of the gap and (with variational equations) of their columns, and, when
+    /// asked (a root search follows), the Bernstein coefficients of the gap over the step;
+    /// `out` is the kernel's verdict. The step is the one [`Simulator::compute_step`] would compute
     /// from the same start: a lane whose step the kernel left open (non-finite, no valid step
     /// size) is computed here by `compute_step` itself.
     pub(crate) fn take_lane_step(
         &mut self,
         leaving: bool,
         out: LaneEnd,
-        fill: impl FnOnce(&mut FlightSeries, Option<&mut VariationSeries>),
+        fill: impl FnOnce(&mut FlightSeries, Option<&mut VariationSeries>, Option<&mut [f64; BUF]>),
     ) -> Result<(), SimError> {
         if !out.finite || out.h.is_nan() || out.h < 0.0 {
             return self.compute_step();
@@ -1065,16 +1063,21 @@ impl Simulator {
         step.len = 0.0;
         step.end_gap = None;
         step.riding = false;
-        fill(&mut step.series, self.var.as_mut().map(|v| &mut v.cols));
+        // The kernel's Bernstein coefficients are those of the whole gap, so not of the gap
+        // divided by `s` when the step leaves the plate.
+        let mut bernstein = (!out.clear && !leaving).then_some([0.0; BUF]);
+        fill(
+            &mut step.series,
+            self.var.as_mut().map(|v| &mut v.cols),
+            bernstein.as_mut(),
+        );
         if let Some(v) = self.var.as_mut() {
             if v.reseed {
                 v.phi = IDENTITY;
                 v.reseed = false;
             }
         }
-        // The kernel's Bernstein coefficients are those of the whole gap, so not of the
-        // gap divided by `s` when the step leaves the plate.
-        let bernstein = (!leaving).then_some(&out.bernstein[..=self.order + 1]);
+        let bernstein = bernstein.as_ref().map(|b| &b[..=self.order + 1]);
         self.end_free_step(usize::from(leaving), out.h, out.clear, out.far, bernstein);
         if out.clear && out.far {
             self.step.end_gap = Some(out.end_gap);
