@@ -113,6 +113,9 @@ where
     )
 }
 
+/// Where a worker sends each finished item (`false`: the sweep is cancelled).
+type Sink<'a, O> = dyn FnMut(usize, Result<O, SimError>) -> bool + 'a;
+
 /// A task in progress on a worker.
 struct Live<T> {
     item: usize,
@@ -163,7 +166,7 @@ impl<T: Task> Worker<T> {
     fn work(
         &mut self,
         pull: &mut impl FnMut() -> Option<(usize, Result<T, SimError>)>,
-        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut Sink<'_, T::Output>,
     ) {
         let mut exhausted = false;
         let mut stopped = Vec::new();
@@ -227,12 +230,7 @@ impl<T: Task> Worker<T> {
     }
 
     /// Starts `task` for `item`: queues its first runs.
-    fn begin(
-        &mut self,
-        item: usize,
-        mut task: T,
-        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
-    ) -> bool {
+    fn begin(&mut self, item: usize, mut task: T, send: &mut Sink<'_, T::Output>) -> bool {
         let runs = match task.start() {
             Ok(r) => r,
             Err(e) => return send(item, Err(e)),
@@ -255,12 +253,7 @@ impl<T: Task> Worker<T> {
     }
 
     /// Queues `runs` for the task in `slot` (finishing it if it has nothing left to do).
-    fn ask(
-        &mut self,
-        slot: usize,
-        runs: Vec<Run>,
-        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
-    ) -> bool {
+    fn ask(&mut self, slot: usize, runs: Vec<Run>, send: &mut Sink<'_, T::Output>) -> bool {
         let live = self.tasks[slot].as_mut().expect("live task");
         for run in runs {
             let index = live.asked;
@@ -280,7 +273,7 @@ impl<T: Task> Worker<T> {
     }
 
     /// Puts waiting runs in free lanes.
-    fn fill(&mut self, send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool) -> bool {
+    fn fill(&mut self, send: &mut Sink<'_, T::Output>) -> bool {
         for g in 0..self.groups.len() {
             while let Some(lane) = self.groups[g].batch.free_lane() {
                 let Some(job) = self.groups[g].queue.pop_front() else {
@@ -318,7 +311,7 @@ impl<T: Task> Worker<T> {
         g: usize,
         lane: usize,
         r: Result<bool, SimError>,
-        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut Sink<'_, T::Output>,
     ) -> bool {
         let group = &mut self.groups[g];
         let (task, index, run) = group.lanes[lane].as_mut().expect("a run in the lane");
@@ -346,7 +339,7 @@ impl<T: Task> Worker<T> {
         slot: usize,
         index: usize,
         result: Result<Classification, SimError>,
-        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
+        send: &mut Sink<'_, T::Output>,
     ) -> bool {
         let live = self.tasks[slot].as_mut().expect("live task");
         live.open -= 1;
@@ -370,11 +363,7 @@ impl<T: Task> Worker<T> {
     }
 
     /// Sends the output of the task in `slot`, whose runs are all done.
-    fn finish(
-        &mut self,
-        slot: usize,
-        send: &mut dyn FnMut(usize, Result<T::Output, SimError>) -> bool,
-    ) -> bool {
+    fn finish(&mut self, slot: usize, send: &mut Sink<'_, T::Output>) -> bool {
         let live = self.tasks[slot].take().expect("live task");
         let out = match live.failed {
             Some((_, e)) => Err(e),

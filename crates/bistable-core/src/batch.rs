@@ -460,37 +460,30 @@ impl Kernel {
     }
 }
 
-/// Runs the 8-lane kernel in AVX-512 registers where the CPU has them, else portably.
-fn run8(s: &mut Soa<F64x8>, c: &Consts, starts: &[(usize, LaneStart)]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx512f") {
-        // SAFETY: the CPU has AVX-512F, checked just above.
-        return unsafe { run8_avx512(s, c, starts) };
-    }
-    s.run(c, starts)
+/// `$name` runs the kernel over `$lanes` in registers of `$feature` where the CPU has it (the
+/// kernel is compiled a second time, in `$fast`, for that feature), portably otherwise; the
+/// results are the same.
+macro_rules! dispatch {
+    ($name:ident, $fast:ident, $lanes:ty, $feature:tt) => {
+        fn $name(s: &mut Soa<$lanes>, c: &Consts, starts: &[(usize, LaneStart)]) {
+            #[cfg(target_arch = "x86_64")]
+            if std::arch::is_x86_feature_detected!($feature) {
+                // SAFETY: the CPU has the feature, checked just above.
+                return unsafe { $fast(s, c, starts) };
+            }
+            s.run(c, starts)
+        }
+
+        #[cfg(target_arch = "x86_64")]
+        #[target_feature(enable = $feature)]
+        fn $fast(s: &mut Soa<$lanes>, c: &Consts, starts: &[(usize, LaneStart)]) {
+            s.run(c, starts)
+        }
+    };
 }
 
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx512f")]
-fn run8_avx512(s: &mut Soa<F64x8>, c: &Consts, starts: &[(usize, LaneStart)]) {
-    s.run(c, starts)
-}
-
-/// Runs the 4-lane kernel in AVX2 registers where the CPU has them, else portably.
-fn run4(s: &mut Soa<F64x4>, c: &Consts, starts: &[(usize, LaneStart)]) {
-    #[cfg(target_arch = "x86_64")]
-    if std::arch::is_x86_feature_detected!("avx2") {
-        // SAFETY: the CPU has AVX2, checked just above.
-        return unsafe { run4_avx2(s, c, starts) };
-    }
-    s.run(c, starts)
-}
-
-#[cfg(target_arch = "x86_64")]
-#[target_feature(enable = "avx2")]
-fn run4_avx2(s: &mut Soa<F64x4>, c: &Consts, starts: &[(usize, LaneStart)]) {
-    s.run(c, starts)
-}
+dispatch!(run8, run8_avx512, F64x8, "avx512f");
+dispatch!(run4, run4_avx2, F64x4, "avx2");
 
 /// The lanes' starts, side by side ([`LaneStart`]).
 struct Inputs<T> {
