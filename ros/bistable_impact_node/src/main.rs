@@ -853,7 +853,7 @@ fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
     let mut node = context
         .new_node(node_name, options)
         .map_err(|e| format!("cannot create the node: {e}"))?;
-    // Matches of remote subscriptions, for the shutdown linger.
+    // Matches of remote subscriptions (the impact subscriptions counted at shutdown).
     let status = context.domain_participant().status_listener();
 
     let log = Logger {
@@ -1111,12 +1111,9 @@ fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
         ),
     );
     // Reliable subscribers may still be missing some of the last impacts (up to the send window
-    // at a high impact rate): keep DDS running a moment so that they can get them repaired, as
-    // Cyclone DDS's writer linger does. ros2-client has no wait for acknowledgements.
+    // of 8192 at a high impact rate): DDS keeps running until they have acknowledged them all.
     impact_readers.update(&status);
-    if impact_readers.count() > 0 {
-        std::thread::sleep(SHUTDOWN_LINGER);
-    }
+    await_acknowledgements(&impact_pub, impact_readers.count(), n.impacts, &log);
     drop(services);
     drop(node);
     Ok(())
@@ -1180,8 +1177,70 @@ impl MatchedReaders {
 /// How often the loop reads the participant's status events (matched subscriptions).
 const STATUS_POLL: Duration = Duration::from_millis(100);
 
-/// How long DDS keeps running after the simulation loop ends (with impact subscribers).
-const SHUTDOWN_LINGER: Duration = Duration::from_secs(1);
+/// At shutdown DDS keeps running while the matched reliable impact subscribers acknowledge the
+/// published impacts: until all are acknowledged, or no further acknowledgement came for
+/// [`SHUTDOWN_ACK_STALL`] (a subscriber that vanished without a goodbye acknowledges nothing
+/// until DDS drops it at its lease expiry), or [`SHUTDOWN_ACK_LIMIT`] in all.
+const SHUTDOWN_ACK_STALL: Duration = Duration::from_secs(2);
+/// See [`SHUTDOWN_ACK_STALL`].
+const SHUTDOWN_ACK_LIMIT: Duration = Duration::from_secs(10);
+
+/// Waits for the impact subscribers' acknowledgements at shutdown ([`SHUTDOWN_ACK_STALL`]) and
+/// logs the outcome: all `published` impacts acknowledged, or how many were not.
+fn await_acknowledgements(
+    publisher: &Publisher<ImpactEvent>,
+    subscribers: usize,
+    published: u64,
+    log: &Logger,
+) {
+    let start = Instant::now();
+    let mut progress = start;
+    let mut missing = publisher.unacknowledged_count();
+    loop {
+        match publisher.wait_for_acknowledgments(Duration::from_millis(100)) {
+            Ok(true) => {
+                if subscribers > 0 {
+                    log.log(
+                        LogLevel::Info,
+                        &format!(
+                            "impacts: all {published} published acknowledged by the {subscribers} \
+                             matched subscriptions in {:.3} s",
+                            start.elapsed().as_secs_f64()
+                        ),
+                    );
+                }
+                return;
+            }
+            Ok(false) => {}
+            Err(e) => {
+                log.log(
+                    LogLevel::Warn,
+                    &format!("impacts: cannot wait for acknowledgements: {e}"),
+                );
+                return;
+            }
+        }
+        let now = Instant::now();
+        let left = publisher.unacknowledged_count();
+        if left < missing {
+            missing = left;
+            progress = now;
+        }
+        if now - progress >= SHUTDOWN_ACK_STALL || now - start >= SHUTDOWN_ACK_LIMIT {
+            log.log(
+                LogLevel::Warn,
+                &format!(
+                    "impacts: {left} of {published} published not acknowledged by every matched \
+                     subscription after {:.3} s ({} s without progress, or {} s in all)",
+                    (now - start).as_secs_f64(),
+                    SHUTDOWN_ACK_STALL.as_secs(),
+                    SHUTDOWN_ACK_LIMIT.as_secs()
+                ),
+            );
+            return;
+        }
+    }
+}
 
 fn publish_tick(
     runner: &Runner,
