@@ -41,10 +41,10 @@ FREE_RUN = float(os.environ.get("STREAM_SECONDS", "2.5"))
 DEPTH = 1000
 CHATTER = (0.2, 0.05)
 BASELINE = (1.75, 0.07)
-# Lowest free-running rate [impacts per wall second] a run must reach to count as fast (the
-# issue's losses showed at 5,900-8,100 a second on a quiet machine; the project's history test
-# runs at ~3,000).
-MIN_RATE = float(os.environ.get("STREAM_MIN_RATE", "4000"))
+# Lowest free-running rate [impacts per wall second] an unloaded run must reach to count as fast
+# (here: chatter 7,000-8,000 a second with an rclpy subscriber, ~20,000 with Cyclone DDS; baseline
+# 3,000-5,000; the rclpy subscriber's Python process shares the two cores with the node).
+MIN_RATE = float(os.environ.get("STREAM_MIN_RATE", "2500"))
 
 
 class RclpyImpacts:
