@@ -158,6 +158,8 @@ impl Logger {
 struct Counters {
     states: u64,
     states_dropped: u64,
+    /// State ticks with no subscription matched (nothing built or published).
+    states_unsubscribed: u64,
     impacts: u64,
     impacts_failed: u64,
     commands: u64,
@@ -751,6 +753,10 @@ fn diagnostics(st: &LoopState, fully_qualified: &str, rtf: f64) -> DiagnosticArr
                 kv("ticks over 10 ms late", n.late_ticks.to_string()),
                 kv("states published", n.states.to_string()),
                 kv("states dropped", n.states_dropped.to_string()),
+                kv(
+                    "states without subscriber",
+                    n.states_unsubscribed.to_string(),
+                ),
                 kv("impact count", r.impact_count().to_string()),
                 kv("impacts published", n.impacts.to_string()),
                 kv("impacts waiting", st.impacts.len().to_string()),
@@ -1189,14 +1195,16 @@ fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
         LogLevel::Info,
         &format!(
             "stopping at t = {} s: {} impacts located, {} published ({} failed), {} states \
-             published ({} dropped), {} commands accepted, {} refused, {} dropped when due; \
-             {} requests refused, {} resets; {} paced ticks, lateness max {:.3} ms, {} over 10 ms",
+             published ({} dropped, {} without subscriber), {} commands accepted, {} refused, \
+             {} dropped when due; {} requests refused, {} resets; {} paced ticks, lateness max \
+             {:.3} ms, {} over 10 ms",
             runner.now(),
             runner.impact_count(),
             n.impacts,
             n.impacts_failed,
             n.states,
             n.states_dropped,
+            n.states_unsubscribed,
             n.commands,
             n.commands_refused,
             runner.commands_dropped(),
@@ -1350,6 +1358,7 @@ fn publish_tick(
     // later subscriber would not get it anyway).
     let state_wanted = state_pub.matched_reader_count() > 0;
     let clock_wanted = clock_pub.matched_reader_count() > 0;
+    n.states_unsubscribed += u64::from(!state_wanted);
     if !state_wanted && !clock_wanted {
         return;
     }
