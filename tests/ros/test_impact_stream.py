@@ -5,7 +5,8 @@ speed; the simulation waits for it instead.
 Each run: keep-all, reliable, transient-local subscribers (rclpy on Fast DDS, or Eclipse Cyclone
 DDS through its Python binding) exist before the node starts; the node starts frozen
 (real_time_factor 1e-9) until they have impact 0, then free-runs for FREE_RUN wall seconds; a
-second transient-local subscriber of the same kind joins mid-run. The run ends by a freeze
+second transient-local subscriber of the same kind joins mid-run, in a participant of its own (a
+subscriber process started later). The run ends by a freeze
 (real_time_factor 1e-9 again, the node alive) or by SIGINT while impacts stream; the subscribers
 drain. Then the early subscribers hold exactly the indices 0..N-1 (N from the node's summary),
 equal to the core simulator's impacts to 1e-12, and the mid-run one the last history_depth
@@ -81,13 +82,25 @@ class Peers:
     """The rclpy peer (parameters, rclpy subscriptions) and a Cyclone DDS participant."""
 
     def __init__(self, domain):
+        self.domain = domain
         self.spinner = Spinner(domain, "stream_peer")
         self.dp = DomainParticipant(domain)
         self.topic = Topic(self.dp, "rt/bistable/impacts", CycloneImpact)
         self.readers = []
+        self.late_spinner = None
 
-    def subscribe(self, kind):
-        r = RclpyImpacts(self.spinner) if kind == "rclpy" else CycloneImpacts(self.dp, self.topic)
+    def subscribe(self, kind, own_participant=False):
+        """A subscription in the peer's participant, or (`own_participant`) in a new one, as a
+        subscriber process that starts later would be (Cyclone DDS hands a transient-local
+        reader samples its participant got for another reader before the node's writer has
+        matched it, see ros/patches/README.md)."""
+        if kind == "rclpy":
+            if own_participant:
+                self.late_spinner = Spinner(self.domain, "stream_late_peer")
+            r = RclpyImpacts(self.late_spinner if own_participant else self.spinner)
+        else:
+            dp = DomainParticipant(self.domain) if own_participant else self.dp
+            r = CycloneImpacts(dp, Topic(dp, "rt/bistable/impacts", CycloneImpact) if own_participant else self.topic)
         self.readers.append(r)
         return r
 
@@ -95,6 +108,8 @@ class Peers:
         end = time.monotonic() + timeout
         while not cond() and time.monotonic() < end:
             self.spinner.executor.spin_once(timeout_sec=0.005)
+            if self.late_spinner:
+                self.late_spinner.executor.spin_once(timeout_sec=0)
             for r in self.readers:
                 r.poll()
         return cond()
@@ -114,6 +129,8 @@ class Peers:
             self.spin_for(quiet)
 
     def close(self):
+        if self.late_spinner:
+            self.late_spinner.close()
         self.spinner.close()
 
 
@@ -138,6 +155,7 @@ def check_stream(got, ref, first, last, name):
 
 
 def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
+    """One run (see the module's docstring)."""
     omega, v = case
     rng = random.Random(domain)
     peers = Peers(domain)
@@ -161,7 +179,7 @@ def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
         started = time.monotonic()
         peers.spin_for(rng.uniform(0.6, 1.2))
         joined_after = max(len(r.got) for r in early)  # impacts published before the late one
-        late = peers.subscribe(late_kind)
+        late = peers.subscribe(late_kind, own_participant=True)
         peers.spin_until(lambda: time.monotonic() - started >= FREE_RUN, FREE_RUN)
         if interrupt:
             node.interrupt()
