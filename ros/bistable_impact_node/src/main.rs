@@ -215,7 +215,8 @@ impl Pacer {
     }
 }
 
-/// How often the loop looks for commands and requests while it waits for wall time.
+/// How often at most the loop looks for service requests (running free, it takes commands
+/// between all its steps); also how long it sleeps while commands or requests are left unread.
 const POLL: Duration = Duration::from_millis(1);
 /// Per-command log lines (accepted, refused, applied) let through per second; the others are
 /// counted and summarised once a second (the totals are in the shutdown summary).
