@@ -86,7 +86,8 @@ class NodeProcess:
 
 
 SUMMARY = re.compile(r"stopping at t = (?P<t>\S+) s: (?P<located>\d+) impacts located, (?P<published>\d+) published "
-                     r"\((?P<failed>\d+) failed\), (?P<states>\d+) states published \((?P<dropped>\d+) dropped\), "
+                     r"\((?P<failed>\d+) failed\), (?P<states>\d+) states published \((?P<dropped>\d+) dropped, "
+                     r"(?P<unsubscribed>\d+) without subscriber\), "
                      r"(?P<accepted>\d+) commands accepted, (?P<refused>\d+) refused, (?P<dropped_when_due>\d+) dropped when due; "
                      r"(?:(?P<requests_refused>\d+) requests refused, (?P<resets>\d+) resets; )?"
                      r"(?P<paced_ticks>\d+) paced ticks, lateness max (?P<max_lateness_ms>\S+) ms, (?P<late_ticks>\d+) over 10 ms")

@@ -3,76 +3,15 @@ node's topics as plain DDS topics `rt/...` with the ROS 2 type names, and sends 
 command."""
 import math
 import time
-from dataclasses import dataclass
 
 from common import NodeProcess, assert_impacts_match, reference
-from cyclonedds.core import Qos, Policy
+from cyclone_types import Clock, Header, ImpactEvent, MassState, ShakerCommand, Time
+from cyclonedds.core import Policy, Qos
 from cyclonedds.domain import DomainParticipant
-from cyclonedds.idl import IdlStruct
-from cyclonedds.idl.types import float64, int32, uint8, uint32, uint64
 from cyclonedds.pub import DataWriter
 from cyclonedds.sub import DataReader
 from cyclonedds.topic import Topic
 from cyclonedds.util import duration
-
-
-@dataclass
-class Time(IdlStruct, typename="builtin_interfaces::msg::dds_::Time_"):
-    sec: int32
-    nanosec: uint32
-
-
-@dataclass
-class Header(IdlStruct, typename="std_msgs::msg::dds_::Header_"):
-    stamp: Time
-    frame_id: str
-
-
-@dataclass
-class MassState(IdlStruct, typename="bistable_impact_msgs::msg::dds_::MassState_"):
-    header: Header
-    t: float64
-    x: float64
-    v: float64
-    z: float64
-    zdot: float64
-    kinetic_energy: float64
-    potential_energy: float64
-    well: uint8
-    in_contact: bool
-    impact_count: uint64
-    shaker_mode: uint8
-    shaker_omega: float64
-    shaker_velocity: float64
-
-
-@dataclass
-class ImpactEvent(IdlStruct, typename="bistable_impact_msgs::msg::dds_::ImpactEvent_"):
-    header: Header
-    index: uint64
-    t: float64
-    phase: float64
-    x: float64
-    v_before: float64
-    v_after: float64
-    zdot: float64
-    delta_k: float64
-    ended_in_sticking: bool
-
-
-@dataclass
-class ShakerCommand(IdlStruct, typename="bistable_impact_msgs::msg::dds_::ShakerCommand_"):
-    header: Header
-    mode: uint8
-    omega: float64
-    velocity: float64
-    z: float64
-    zdot: float64
-
-
-@dataclass
-class Clock(IdlStruct, typename="rosgraph_msgs::msg::dds_::Clock_"):
-    clock: Time
 
 
 RELIABLE = Policy.Reliability.Reliable(max_blocking_time=duration(milliseconds=100))
