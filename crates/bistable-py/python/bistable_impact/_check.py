@@ -29,7 +29,7 @@ MAX_LYAPUNOV_PERIODS = 1_000_000
 #: Most dense-output samples per shaker period of the bifurcation maxima (``samples``).
 MAX_CYCLE_SAMPLES = 4096
 #: Most worker threads (``threads``; 0: one per core).
-MAX_THREADS = 1024
+MAX_THREADS: int = _native.MAX_THREADS
 #: Most periods of orbit branches (``branch_periods``) in one call.
 MAX_BRANCHES = 64
 
