@@ -33,12 +33,12 @@ pub(crate) const MAX_CLOCK_SPAN: f64 = 4_503_599_627_370_496.0;
 /// is refused rather than left to run for seconds; split it into several. Runs in the model's
 /// scope need at most about 4 core steps per radian, so a step of this span stays within half
 /// of [`MAX_STEP_BUDGET`].
-pub(crate) const MAX_STEP_SPAN: f64 = 5e4;
+pub(crate) const MAX_STEP_SPAN: f64 = 3e4;
 
 /// Most core steps one `fmi2DoStep` may compute (see [`step_budget`]): at about 1 µs per core
 /// step on the slowest states measured (chatter with `e = 1`), a step stops with a Discard
-/// within about 0.4 s of wall time.
-pub(crate) const MAX_STEP_BUDGET: u64 = 400_000;
+/// within about 0.3 s of wall time.
+pub(crate) const MAX_STEP_BUDGET: u64 = 250_000;
 
 /// Whether a sinusoid of frequency `omega` with origin `origin` is within the clock range at
 /// `now` (and the origin not after it).
@@ -219,7 +219,7 @@ struct Collect<'a> {
 /// 1), at least twice less than the allowance; a state driven far outside it (the plate
 /// velocity V = 1e6, a plate input of 1e24 in units of delta_x*omega0, whose oscillations need
 /// ever shorter steps, or e = 1 with zeta = 5 and omega0 = 1e8, chatter that never ends) is
-/// stopped after at most [`MAX_STEP_BUDGET`] steps, within about 0.4 s, instead of integrating
+/// stopped after at most [`MAX_STEP_BUDGET`] steps, within about 0.3 s, instead of integrating
 /// for hours.
 fn step_budget(radians: f64) -> u64 {
     (100_000.0 + 50.0 * radians.max(0.0)).min(MAX_STEP_BUDGET as f64) as u64

@@ -875,11 +875,11 @@ static fmi2Status do_step(Inst *in, int kind) {
     double t_end = tc + h;
     int valid = isfinite(h) && h > 0 && fabs(tc - t) <= slack(t) && t_end > t &&
                 (!m->has_stop || t_end <= m->stop + slack(m->stop));
-    /* The FMU refuses a step that spans more than 5e4 shaker radians (time units when Omega < 1)
+    /* The FMU refuses a step that spans more than 3e4 shaker radians (time units when Omega < 1)
      * or ends more than 2^52 of them after the start time (fmi2DoStep). */
     double step_span = fabs((t_end - t) * w0) * fmax(m->val[iOmega], 1.0);
     double clock_span = fabs((t_end - m->start) * w0) * fmax(m->val[iOmega], 1.0);
-    if (!(step_span <= 5e4 && clock_span < 0x1p52)) valid = 0;
+    if (!(step_span <= 3e4 && clock_span < 0x1p52)) valid = 0;
     if (valid && step_span > 1e4) {
         /* Valid, but a fraction of a second of work: kept for the steps that are meant to be
          * long, replaced by an ordinary step otherwise to keep the campaign fast. */

@@ -153,7 +153,12 @@ HOSTILE = st.one_of(
 
 ALLOWED = (ValueError, TypeError, RuntimeError)
 #: Rules between two arguments, whose error names the other one: (function, target) -> name.
-COMBINED = {("Simulator", "t0"): "x0"}  # x0 must not be below the plate at t0
+COMBINED = {
+    ("Simulator", "t0"): "x0",  # x0 must not be below the plate at t0
+    # the starts x0 (from 0) must not be below the plate at the phase
+    ("sweep.basins", "phase"): "x0",
+    ("sweep.basin_uncertainty", "phase"): "x0",
+}
 
 
 def check_one(fname, base, name, value, outcomes, failures):

@@ -234,3 +234,26 @@ def test_hostile_calls_property(group):
     assert not summary["failures"], "\n".join(summary["failures"])
     assert p.returncode == 0, p.stderr[-2000:]
     assert summary["examples"] >= HOSTILE_EXAMPLES, summary
+
+
+def test_a_simulator_stopped_by_ctrl_c_goes_on_from_where_it_stopped():
+    code = textwrap.dedent(
+        """
+        import os, signal, threading
+        import bistable_impact as bi
+        s = bi.Simulator(1.75, 0.07)
+        threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()
+        try:
+            s.advance_to(1e12)
+            print("finished")
+        except KeyboardInterrupt:
+            t = s.time
+            assert 0 < t < 1e12, t
+            s.advance_to(t + 10.0)
+            assert s.time == t + 10.0
+            assert bi.Simulator.from_checkpoint(s.checkpoint()).time == s.time
+            print("went on")
+        """
+    )
+    rc, out, err = _python(code, timeout=30)
+    assert (rc, out.strip()) == (0, "went on"), err[-2000:]

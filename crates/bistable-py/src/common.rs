@@ -146,8 +146,8 @@ pub(crate) fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'p
     Ok(d)
 }
 
-/// Most worker threads of a `threads` argument.
-const MAX_THREADS: usize = 1024;
+/// Most worker threads of a `threads` argument (also `bistable_impact._native.MAX_THREADS`).
+pub(crate) const MAX_THREADS: usize = 1024;
 
 /// The thread count of a `threads` argument: 0 means all cores; at most 1024.
 /// The lane width of a sweep: 1 (one trajectory at a time), 4 or 8 trajectories per thread in

@@ -63,6 +63,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;
     // Most values of one grid (the CLI's cap on a range's points).
     m.add("MAX_POINTS", bistable_analysis::grid::MAX_POINTS)?;
+    // Most worker threads of a `threads` argument.
+    m.add("MAX_THREADS", common::MAX_THREADS)?;
     // The sensitivity test's default settings (one definition, in Rust).
     m.add(
         "SENSITIVITY_DEFAULTS",

@@ -133,7 +133,7 @@ def simulate(
     with more raises ``RuntimeError`` (use :class:`Simulator` with a callback). Ctrl-C raises
     ``KeyboardInterrupt``.
     """
-    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
+    m = check.model(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
     return SimulationResult(
         _native.simulate(
             m["omega"],

@@ -29,7 +29,7 @@ MAX_LYAPUNOV_PERIODS = 1_000_000
 #: Most dense-output samples per shaker period of the bifurcation maxima (``samples``).
 MAX_CYCLE_SAMPLES = 4096
 #: Most worker threads (``threads``; 0: one per core).
-MAX_THREADS = 1024
+MAX_THREADS: int = _native.MAX_THREADS
 #: Most periods of orbit branches (``branch_periods``) in one call.
 MAX_BRANCHES = 64
 
@@ -160,7 +160,9 @@ def classify_options(o: dict) -> dict:
         out[k] = optional_real(k, o[k])
     out["chatter"] = text("chatter", o["chatter"])
     out["max_period"] = integer("max_period", o["max_period"], 1, 64)
-    out["lyapunov_periods"] = integer("lyapunov_periods", o["lyapunov_periods"], 1, MAX_LYAPUNOV_PERIODS)
+    out["lyapunov_periods"] = integer(
+        "lyapunov_periods", o["lyapunov_periods"], 1, MAX_LYAPUNOV_PERIODS
+    )
     if o["repeats"] is not None:
         out["repeats"] = integer("repeats", o["repeats"], 0, 64)
     if o["lyapunov_windows"] is not None:
@@ -168,7 +170,7 @@ def classify_options(o: dict) -> dict:
     return out
 
 
-def model(o: dict) -> dict:
+def model(**o: Any) -> dict:
     """The model's settings among ``o`` (``omega, velocity, zeta, restitution, tol, chatter``),
     converted."""
     out = dict(o)

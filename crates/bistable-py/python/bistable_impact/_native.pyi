@@ -9,6 +9,8 @@ Event = Dict[str, Any]
 COLUMNS: List[str]
 #: Most values of one grid and points of one map (the CLI's cap on ranges, 1e7).
 MAX_POINTS: int
+#: Most worker threads of a ``threads`` argument (1024).
+MAX_THREADS: int
 #: Default settings of the sensitivity test (``None`` arguments of classify/classify_many).
 SENSITIVITY_DEFAULTS: Dict[str, Union[int, float]]
 

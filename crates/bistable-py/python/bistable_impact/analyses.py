@@ -80,7 +80,7 @@ def orbit(
         ValueError: a bad argument (named). RuntimeError: Newton failed (``no P-periodic orbit
         found from (x, v): ...``) or the simulation failed.
     """
-    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
+    m = check.model(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
     d = _native.orbit(
         period=check.integer("period", period, 1, 64),
         guess=None if guess is None else check.pair("guess", guess),
@@ -128,7 +128,7 @@ def continue_omega(
     """
     ws, vs = check.reals("omega", omega), check.reals("velocity", velocity)
     check.grid(("omega", "velocity"), ws, vs)
-    m = check.model(dict(zeta=zeta, restitution=restitution, tol=tol))
+    m = check.model(zeta=zeta, restitution=restitution, tol=tol)
     d = _native.continue_omega(
         ws,
         vs,
@@ -193,8 +193,9 @@ def bifurcation(
     if isinstance(branch_periods, (str, bytes)) or not hasattr(branch_periods, "__len__"):
         raise TypeError("'branch_periods' must be a sequence of integers")
     if len(branch_periods) > check.MAX_BRANCHES:
-        raise check.invalid("branch_periods", f"<{len(branch_periods)} values>", "at most 64 periods")
-    m = check.model(dict(zeta=zeta, restitution=restitution, tol=tol))
+        shown = f"<{len(branch_periods)} values>"
+        raise check.invalid("branch_periods", shown, "at most 64 periods")
+    m = check.model(zeta=zeta, restitution=restitution, tol=tol)
     d = _native.bifurcation(
         param,
         check.reals("values", values),
@@ -300,7 +301,7 @@ def spectrum(
         max_freq: highest frequency (units of ``Ω``, > 0) of the flatness.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
     """
-    m = check.model(dict(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol))
+    m = check.model(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
     d = _native.spectrum(
         transient=check.integer("transient", transient, 0, check.MAX_TRANSIENT),
         record=check.integer("record", record, 8, 1 << 26),

@@ -55,14 +55,17 @@ def _arguments(
     """The arguments :func:`basins` and :func:`basin_uncertainty` share, converted:
     ``(omega, velocity, phase)``, the classification options and ``(client, chunk, threads)``
     (their values are checked by the native module before any work)."""
-    shaker = tuple(check.real(k, v) for k, v in (("omega", omega), ("velocity", velocity), ("phase", phase)))
+    names = ("omega", "velocity", "phase")
+    shaker = tuple(check.real(k, v) for k, v in zip(names, (omega, velocity, phase)))
     options = dict(
         zeta=check.real("zeta", zeta),
         restitution=check.real("restitution", restitution),
         tol=check.real("tol", tol),
         chatter=check.text("chatter", chatter),
         max_periods=check.real("max_periods", max_periods),
-        lyapunov_periods=check.integer("lyapunov_periods", lyapunov_periods, 1, check.MAX_LYAPUNOV_PERIODS),
+        lyapunov_periods=check.integer(
+            "lyapunov_periods", lyapunov_periods, 1, check.MAX_LYAPUNOV_PERIODS
+        ),
         lanes=check.lanes(lanes),
     )
     where = (
