@@ -62,10 +62,15 @@ struct Slot {
 /// restitution, state and target.
 pub struct Batch {
     width: Width,
-    zeta: f64,
     opts: SolverOptions,
+    /// What every kernel pass shares: the damping and what follows from `opts`.
+    consts: Consts,
     slots: Vec<Option<Slot>>,
     kernel: Kernel,
+    /// Scratch of [`Batch::advance`]: the lanes that need a step, and those of them the kernel
+    /// computes, with their starts.
+    ready: Vec<usize>,
+    starts: Vec<(usize, LaneStart)>,
 }
 
 /// Why a simulator cannot join a batch.
@@ -85,10 +90,17 @@ impl Batch {
     pub fn new(width: Width, params: &Params, opts: SolverOptions) -> Self {
         Self {
             width,
-            zeta: params.zeta(),
             opts,
+            consts: Consts {
+                zeta: params.zeta(),
+                order: opts.order(),
+                tol: opts.tol(),
+                ln_tol: opts.tol().ln(),
+            },
             slots: (0..width.lanes()).map(|_| None).collect(),
             kernel: Kernel::new(width),
+            ready: Vec::with_capacity(width.lanes()),
+            starts: Vec::with_capacity(width.lanes()),
         }
     }
 
@@ -119,7 +131,9 @@ impl Batch {
         mut sim: Simulator,
         target: Instant,
     ) -> Result<(), (JoinError, Box<Simulator>)> {
-        if sim.params().zeta().to_bits() != self.zeta.to_bits() || *sim.options() != self.opts {
+        if sim.params().zeta().to_bits() != self.consts.zeta.to_bits()
+            || *sim.options() != self.opts
+        {
             return Err((JoinError::Mismatch, Box::new(sim)));
         }
         if !matches!(self.slots.get(lane), Some(None)) {
@@ -175,12 +189,19 @@ impl Batch {
         stopped: &mut Vec<(usize, Result<bool, SimError>)>,
     ) {
         let first = stopped.len();
-        let mut ready: Vec<usize> = Vec::with_capacity(self.slots.len());
-        let mut starts: Vec<(usize, LaneStart)> = Vec::with_capacity(self.slots.len());
+        let Batch {
+            width,
+            consts,
+            slots,
+            kernel,
+            ready,
+            starts,
+            ..
+        } = self;
         loop {
             ready.clear();
             let mut any = false;
-            for (lane, slot) in self.slots.iter_mut().enumerate() {
+            for (lane, slot) in slots.iter_mut().enumerate() {
                 let Some(slot) = slot.as_mut().filter(|s| s.running) else {
                     continue;
                 };
@@ -202,14 +223,14 @@ impl Batch {
                 return;
             }
             starts.clear();
-            for &lane in &ready {
-                let slot = self.slots[lane].as_mut().expect("ready lanes are occupied");
+            for &lane in ready.iter() {
+                let slot = slots[lane].as_mut().expect("ready lanes are occupied");
                 if let Err(e) = slot.sim.interruption() {
                     slot.running = false;
                     stopped.push((lane, Err(e)));
                     continue;
                 }
-                let start = match self.width {
+                let start = match width {
                     Width::One => None,
                     _ => slot.sim.lane_start(),
                 };
@@ -230,21 +251,15 @@ impl Batch {
             if starts.is_empty() {
                 continue;
             }
-            let consts = Consts {
-                zeta: self.zeta,
-                order: self.opts.order(),
-                tol: self.opts.tol(),
-                ln_tol: self.opts.tol().ln(),
-            };
-            for &(lane, _) in &starts {
-                let sim = &self.slots[lane].as_ref().expect("occupied").sim;
-                self.kernel.load_magnitudes(lane, sim.plate_magnitudes());
+            for &(lane, _) in starts.iter() {
+                let sim = &slots[lane].as_ref().expect("occupied").sim;
+                kernel.load_magnitudes(lane, sim.plate_magnitudes());
             }
-            self.kernel.run(&consts, &starts);
-            for &(lane, st) in &starts {
-                let slot = self.slots[lane].as_mut().expect("occupied");
-                let out = self.kernel.verdict(lane);
-                let kernel = &self.kernel;
+            kernel.run(consts, starts);
+            for &(lane, st) in starts.iter() {
+                let slot = slots[lane].as_mut().expect("occupied");
+                let out = kernel.verdict(lane);
+                let kernel = &*kernel;
                 let taken = slot.sim.take_lane_step(st.leaving, out, |series, var, b| {
                     kernel.copy_lane(lane, consts.order, series, var, b)
                 });

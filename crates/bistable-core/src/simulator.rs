@@ -331,6 +331,25 @@ struct Variational {
     reseed: bool,
 }
 
+impl Variational {
+    /// `Φ` at the start of the next free step: `I` when a reseed is pending.
+    fn step_start(&self) -> [[f64; 2]; 2] {
+        if self.reseed {
+            IDENTITY
+        } else {
+            self.phi
+        }
+    }
+
+    /// Takes a pending reseed once the free step from it goes on: `Φ = I` at its start.
+    fn take_reseed(&mut self) {
+        if self.reseed {
+            self.phi = IDENTITY;
+            self.reseed = false;
+        }
+    }
+}
+
 /// `Φ = I`: the variational solution where it starts.
 const IDENTITY: [[f64; 2]; 2] = [[1.0, 0.0], [0.0, 1.0]];
 
@@ -883,7 +902,7 @@ impl Simulator {
                 // (from Φ = I if a reseed is pending; the reseed is taken only if the step
                 // goes on).
                 let var = self.var.as_mut().map(|v| {
-                    v.cols.start(if v.reseed { IDENTITY } else { v.phi });
+                    v.cols.start(v.step_start());
                     &mut v.cols
                 });
                 taylor::flight(zeta, self.u0, self.w0, &z, p, s, var);
@@ -913,10 +932,7 @@ impl Simulator {
                     return Ok(());
                 }
                 if let Some(v) = self.var.as_mut() {
-                    if v.reseed {
-                        v.phi = IDENTITY;
-                        v.reseed = false;
-                    }
+                    v.take_reseed();
                 }
                 let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol, ln_tol).min(room);
                 if h.is_nan() || h < 0.0 {
@@ -1027,10 +1043,7 @@ impl Simulator {
             leaving,
             above: self.well == Well::Two,
             on_barrier: self.on_barrier,
-            phi: self
-                .var
-                .as_ref()
-                .map(|v| if v.reseed { IDENTITY } else { v.phi }),
+            phi: self.var.as_ref().map(Variational::step_start),
         })
     }
 
@@ -1072,10 +1085,7 @@ impl Simulator {
             bernstein.as_mut(),
         );
         if let Some(v) = self.var.as_mut() {
-            if v.reseed {
-                v.phi = IDENTITY;
-                v.reseed = false;
-            }
+            v.take_reseed();
         }
         let bernstein = bernstein.as_ref().map(|b| &b[..=self.order + 1]);
         self.end_free_step(usize::from(leaving), out.h, out.clear, out.far, bernstein);
