@@ -158,6 +158,7 @@ impl CellTask {
 }
 
 impl Task for CellTask {
+    type Run = Run;
     type Output = Cell;
 
     fn start(&mut self) -> Result<Vec<Run>, SimError> {

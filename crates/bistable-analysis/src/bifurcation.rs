@@ -4,7 +4,7 @@
 
 use std::num::NonZeroU32;
 
-use bistable_core::SimError;
+use bistable_core::{SimError, Width};
 
 use crate::branches::{self, Branches};
 use crate::cycles::{steady_cycles_over, Cycles};
@@ -25,6 +25,9 @@ pub struct BifurcationOptions {
     pub samples: NonZeroU32,
     /// Periods (shaker periods) of the orbit branches to find; empty: no branches.
     pub branch_periods: Vec<u32>,
+    /// Trajectories per thread in SIMD lanes for the recorded runs (the data is the same for
+    /// every width).
+    pub width: Width,
 }
 
 /// The bifurcation data along a grid.
@@ -75,7 +78,7 @@ impl Bifurcation {
     }
 }
 
-/// Records every point of `models` (in parallel), detects the periods, then seeds and
+/// Records every point of `models` (in parallel, `o.width` runs per thread in SIMD lanes), detects the periods, then seeds and
 /// continues the orbit branches.
 pub fn compute<E: From<SimError>>(
     models: &[Model],
@@ -83,7 +86,15 @@ pub fn compute<E: From<SimError>>(
     threads: Threads,
     progress: &mut OnProgress<'_, E>,
 ) -> Result<Bifurcation, E> {
-    let points = steady_cycles_over(models, o.transient, o.record, o.samples, threads, progress)?;
+    let points = steady_cycles_over(
+        models,
+        o.transient,
+        o.record,
+        o.samples,
+        threads,
+        o.width,
+        progress,
+    )?;
     let periods: Vec<Option<usize>> = points
         .iter()
         .map(|c| detect_period(&c.sections, MAX_PERIOD, PERIOD_TOL))

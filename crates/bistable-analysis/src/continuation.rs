@@ -4,7 +4,7 @@
 
 use std::num::NonZeroU32;
 
-use bistable_core::SimError;
+use bistable_core::{SimError, Width};
 
 use crate::arclength::{self, ArcOptions, ArcPoint};
 use crate::branches::{self, Branches};
@@ -94,24 +94,33 @@ impl Curves {
 /// non-empty). At every grid point the paper's initial condition runs `settle` shaker periods,
 /// then `4·max(p, 16) + 8` are recorded; the recorded attractor seeds the orbit (itself, or if
 /// its period is a multiple of `period`, the orbit it doubled from).
+/// The seeding runs take `width` lanes per thread (the seeds are the same for every width).
 pub fn continue_orbits<E: From<SimError>>(
     models: &[Model],
     period: u32,
     settle: u32,
     method: Method,
     threads: Threads,
+    width: Width,
     progress: &mut OnProgress<'_, E>,
 ) -> Result<Curves, E> {
     let record = 4 * period.max(16) + 8;
-    let seeds: Vec<Seed> =
-        steady_cycles_over(models, settle, record, SEED_SAMPLES, threads, progress)?
-            .iter()
-            .enumerate()
-            .flat_map(|(i, c)| {
-                let attractor = detect_period(&c.sections, MAX_PERIOD, PERIOD_TOL);
-                seeds_from(i, &c.sections, attractor, &[period])
-            })
-            .collect();
+    let seeds: Vec<Seed> = steady_cycles_over(
+        models,
+        settle,
+        record,
+        SEED_SAMPLES,
+        threads,
+        width,
+        progress,
+    )?
+    .iter()
+    .enumerate()
+    .flat_map(|(i, c)| {
+        let attractor = detect_period(&c.sections, MAX_PERIOD, PERIOD_TOL);
+        seeds_from(i, &c.sections, attractor, &[period])
+    })
+    .collect();
     Ok(match method {
         Method::Natural => {
             let mut b = branches::build(models, &[period], &seeds, threads, progress)?;

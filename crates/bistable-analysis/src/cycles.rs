@@ -4,9 +4,10 @@
 
 use std::num::NonZeroU32;
 
-use bistable_core::{Event, SimError, Simulator, Sinusoid};
+use bistable_core::{Event, Instant, Params, SimError, Simulator, Sinusoid, SolverOptions, Width};
 
-use crate::parallel::{self, Threads};
+use crate::ensemble::{self, drive, LaneRun, RunSpec, Single};
+use crate::parallel::Threads;
 use crate::progress::{OnProgress, Progress, Stage};
 use crate::Model;
 
@@ -35,41 +36,128 @@ pub fn record_cycles(
     cycles: u32,
     samples: NonZeroU32,
 ) -> Result<Cycles, SimError> {
-    let samples = samples.get();
-    let h = plate.period() / f64::from(samples);
-    let mut out = Cycles::default();
-    let st = sim.state();
-    out.sections.push((st.x, st.v));
-    let (mut x0, mut v0) = (st.x, st.v);
-    for c in 0..cycles {
-        let start = plate.section(first + u64::from(c));
-        let mut best = x0;
-        for j in 1..=samples {
-            let target = if j == samples {
-                plate.section(first + u64::from(c) + 1)
-            } else {
-                start + f64::from(j) * h
-            };
-            let mut kinks = false;
-            sim.advance_instant(target, &mut |e: &Event| match e {
-                Event::Impact(i) => {
-                    kinks = true;
-                    out.impacts.push((c, i.phase.unwrap_or(f64::NAN)));
-                }
-                Event::StickStart { .. } | Event::StickEnd { .. } => kinks = true,
-                Event::SnapThrough { .. } => {}
-            })?;
-            let s = sim.state();
-            best = best.max(s.x);
-            if !kinks && v0 > 0.0 && s.v < 0.0 {
-                best = best.max(hermite_max(x0, v0, s.x, s.v, h));
-            }
-            (x0, v0) = (s.x, s.v);
-        }
-        out.max_x.push(best);
-        out.sections.push((x0, v0));
+    let mut rec = CycleRecorder::new(plate, first, cycles, samples, false);
+    match rec.begin(sim) {
+        Some(c) => Ok(c),
+        None => drive(&mut rec, sim),
     }
-    Ok(out)
+}
+
+/// [`record_cycles`] taken one sample interval at a time ([`LaneRun`]), after an optional
+/// settling advance to the first recorded section.
+pub struct CycleRecorder {
+    plate: Sinusoid,
+    first: u64,
+    cycles: u32,
+    samples: u32,
+    /// Time between samples.
+    h: f64,
+    /// Advancing to `plate.section(first)` before recording.
+    settling: bool,
+    /// The cycle and the sample (`1..=samples`) advanced to.
+    cycle: u32,
+    sample: u32,
+    /// The largest `x` of the cycle so far, and the state at the last sample.
+    best: f64,
+    x0: f64,
+    v0: f64,
+    /// An impact or a sticking change since the last sample.
+    kinks: bool,
+    out: Cycles,
+}
+
+impl CycleRecorder {
+    /// A recorder of `cycles` cycles from `plate.section(first)` (see [`record_cycles`]); with
+    /// `settle`, the simulator is first advanced there, else it stands there and
+    /// [`CycleRecorder::begin`] comes first.
+    pub fn new(
+        plate: Sinusoid,
+        first: u64,
+        cycles: u32,
+        samples: NonZeroU32,
+        settle: bool,
+    ) -> Self {
+        let samples = samples.get();
+        Self {
+            plate,
+            first,
+            cycles,
+            samples,
+            h: plate.period() / f64::from(samples),
+            settling: settle,
+            cycle: 0,
+            sample: 1,
+            best: 0.0,
+            x0: 0.0,
+            v0: 0.0,
+            kinks: false,
+            out: Cycles::default(),
+        }
+    }
+
+    /// Starts recording at `sim`'s state (at the first section): the record when there are
+    /// no cycles to record.
+    pub fn begin(&mut self, sim: &Simulator) -> Option<Cycles> {
+        let st = sim.state();
+        self.out.sections.push((st.x, st.v));
+        (self.x0, self.v0, self.best) = (st.x, st.v, st.x);
+        (self.cycles == 0).then(|| std::mem::take(&mut self.out))
+    }
+}
+
+impl LaneRun for CycleRecorder {
+    type Result = Cycles;
+
+    fn target(&self) -> Instant {
+        let c = self.first + u64::from(self.cycle);
+        if self.settling {
+            self.plate.section(self.first)
+        } else if self.sample == self.samples {
+            self.plate.section(c + 1)
+        } else {
+            self.plate.section(c) + f64::from(self.sample) * self.h
+        }
+    }
+
+    fn event(&mut self, e: &Event) {
+        if self.settling {
+            return;
+        }
+        match e {
+            Event::Impact(i) => {
+                self.kinks = true;
+                self.out
+                    .impacts
+                    .push((self.cycle, i.phase.unwrap_or(f64::NAN)));
+            }
+            Event::StickStart { .. } | Event::StickEnd { .. } => self.kinks = true,
+            Event::SnapThrough { .. } => {}
+        }
+    }
+
+    fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Cycles>, SimError> {
+        if self.settling {
+            self.settling = false;
+            return Ok(self.begin(sim));
+        }
+        let s = sim.state();
+        self.best = self.best.max(s.x);
+        if !self.kinks && self.v0 > 0.0 && s.v < 0.0 {
+            self.best = self
+                .best
+                .max(hermite_max(self.x0, self.v0, s.x, s.v, self.h));
+        }
+        (self.x0, self.v0, self.kinks) = (s.x, s.v, false);
+        if self.sample < self.samples {
+            self.sample += 1;
+            return Ok(None);
+        }
+        self.out.max_x.push(self.best);
+        self.out.sections.push((self.x0, self.v0));
+        (self.best, self.sample) = (self.x0, 1);
+        self.cycle += 1;
+        Ok((self.cycle == self.cycles).then(|| std::mem::take(&mut self.out)))
+    }
 }
 
 /// The largest value of the cubic Hermite interpolant of `x(0) = x0, x'(0) = v0, x(h) = x1,
@@ -106,6 +194,39 @@ pub fn settled(model: &Model, periods: u32) -> Result<Simulator, SimError> {
     Ok(sim)
 }
 
+/// A run of [`steady_cycles`]: the paper's initial condition for `transient` shaker periods,
+/// then `cycles` recorded with `samples` samples per cycle.
+#[derive(Debug, Clone, Copy)]
+pub struct SteadyCycles {
+    /// The model.
+    pub model: Model,
+    /// Shaker periods skipped.
+    pub transient: u32,
+    /// Shaker periods recorded.
+    pub cycles: u32,
+    /// Samples per recorded period.
+    pub samples: NonZeroU32,
+}
+
+impl RunSpec for SteadyCycles {
+    type Lane = CycleRecorder;
+
+    fn setting(&self) -> (Params, SolverOptions) {
+        (self.model.params, self.model.opts)
+    }
+
+    fn begin(&self) -> Result<(CycleRecorder, Simulator), SimError> {
+        let rec = CycleRecorder::new(
+            self.model.shaker,
+            u64::from(self.transient),
+            self.cycles,
+            self.samples,
+            true,
+        );
+        Ok((rec, self.model.simulator()?))
+    }
+}
+
 /// Runs the paper's initial condition for `transient` shaker periods, then records `cycles`
 /// with `samples` samples per cycle (see [`record_cycles`]).
 pub fn steady_cycles(
@@ -114,33 +235,42 @@ pub fn steady_cycles(
     cycles: u32,
     samples: NonZeroU32,
 ) -> Result<Cycles, SimError> {
-    let mut sim = settled(model, transient)?;
-    record_cycles(
-        &mut sim,
-        model.shaker,
-        u64::from(transient),
+    SteadyCycles {
+        model: *model,
+        transient,
         cycles,
         samples,
-    )
+    }
+    .alone()
 }
 
-/// [`steady_cycles`] at every model (in parallel, on `threads`), in the order of `models`;
-/// reports [`Stage::Simulating`] progress. The first simulation error stops the run.
+/// [`steady_cycles`] at every model (on `threads` threads of `width` lanes,
+/// [`crate::ensemble::run`]; the records are the same for every width), in the order of
+/// `models`; reports [`Stage::Simulating`] progress. The first simulation error stops the run.
 pub fn steady_cycles_over<E: From<SimError>>(
     models: &[Model],
     transient: u32,
     cycles: u32,
     samples: NonZeroU32,
     threads: Threads,
+    width: Width,
     progress: &mut OnProgress<'_, E>,
 ) -> Result<Vec<Cycles>, E> {
     let total = models.len();
     let mut out: Vec<Option<Cycles>> = vec![None; total];
     let mut finished = 0;
-    parallel::run(
+    ensemble::run(
         models,
         threads,
-        |m| steady_cycles(m, transient, cycles, samples),
+        width,
+        |&model| {
+            Ok(Single::new(SteadyCycles {
+                model,
+                transient,
+                cycles,
+                samples,
+            }))
+        },
         |i, c| {
             out[i] = Some(c?);
             finished += 1;

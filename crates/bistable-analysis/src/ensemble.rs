@@ -1,27 +1,95 @@
-//! Many classification runs at once: the runs of a sweep's items (a map point with its
-//! sensitivity repeats, a basin cell) advanced in the SIMD lanes of [`bistable_core::Batch`]es,
-//! one batch per thread and per solver setting.
+//! Many runs at once: the runs of a sweep's items (a map point with its sensitivity repeats, a
+//! basin cell, a bifurcation diagram's point) advanced in the SIMD lanes of
+//! [`bistable_core::Batch`]es, one batch per thread and per solver setting.
 //!
-//! An item is a [`Task`]: it asks for classification runs, takes their results, may ask for
-//! more (the repeats of a suspect point) and then gives its output. [`run_alone`] makes its runs
-//! one after the other with [`classify_from`], in the order they were asked for; [`run`] spreads
-//! items over threads and, with a lane width above 1, keeps every lane of each thread's batches
-//! busy: a lane whose run is over takes the next run waiting (a repeat of a point in progress
-//! first, else the first run of the next item), so runs of uneven length leave no lane idle.
-//! Each lane follows bit for bit the run [`classify_from`] makes alone, so every output is the
-//! same for every width; only the order in which items complete differs.
+//! A run is a [`RunSpec`]: it starts a simulator and a [`LaneRun`], which names the instant to
+//! advance to next, takes the events on the way and, at that instant, either gives its result
+//! or names the next instant. An item is a [`Task`]: it asks for runs, takes their results, may
+//! ask for more (the repeats of a suspect point) and then gives its output. [`run_alone`] makes
+//! its runs one after the other ([`RunSpec::alone`]), in the order they were asked for; [`run`]
+//! spreads items over threads and, with a lane width above 1, keeps every lane of each thread's
+//! batches busy: a lane whose run is over takes the next run waiting (a repeat of a point in
+//! progress first, else the first run of the next item), so runs of uneven length leave no lane
+//! idle. Each lane follows bit for bit the run made alone, so every output is the same for every
+//! width; only the order in which items complete differs.
 
 use std::collections::VecDeque;
 use std::ops::ControlFlow;
 
 use bistable_core::{
-    classify_from, Batch, Classification, ClassifyOptions, ClassifyRun, Event, Params, SimError,
-    Sinusoid, SolverOptions, Tracking, Width,
+    Batch, Classification, ClassifyOptions, ClassifyRun, Event, Instant, Params, SimError,
+    Simulator, Sinusoid, SolverOptions, Tracking, Width,
 };
 
 use crate::parallel::{self, Threads};
 
-/// One classification run ([`classify_from`]'s arguments).
+/// A run taken one stretch at a time, so that a caller can drive its simulator itself (alone
+/// with [`drive`], or as one lane of a [`Batch`]).
+pub trait LaneRun {
+    /// What the run gives at its end.
+    type Result;
+
+    /// The instant to advance the simulator to next.
+    fn target(&self) -> Instant;
+
+    /// Takes an event of the simulator's advance to [`LaneRun::target`].
+    fn event(&mut self, e: &Event);
+
+    /// Takes the simulator at [`LaneRun::target`]: the result when the run is over, `None`
+    /// when it goes on to the next target.
+    fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Self::Result>, SimError>;
+}
+
+impl LaneRun for ClassifyRun {
+    type Result = Classification;
+
+    fn target(&self) -> Instant {
+        ClassifyRun::target(self)
+    }
+
+    fn event(&mut self, e: &Event) {
+        ClassifyRun::event(self, e);
+    }
+
+    fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Classification>, SimError> {
+        ClassifyRun::reached(self, sim)
+    }
+}
+
+/// Advances `sim` from target to target of `run` until it gives its result.
+pub fn drive<R: LaneRun>(run: &mut R, sim: &mut Simulator) -> Result<R::Result, SimError> {
+    loop {
+        let target = run.target();
+        sim.advance_instant(target, &mut |e: &Event| run.event(e))?;
+        if let Some(r) = run.reached(sim)? {
+            return Ok(r);
+        }
+    }
+}
+
+/// A run to make: what starts it, and the setting it shares a batch with other runs by.
+pub trait RunSpec {
+    /// The run in progress.
+    type Lane: LaneRun;
+
+    /// The damping (`ζ`, of the parameters) and solver options: runs that agree in these can
+    /// share a batch.
+    fn setting(&self) -> (Params, SolverOptions);
+
+    /// The run and its simulator, at the start.
+    fn begin(&self) -> Result<(Self::Lane, Simulator), SimError>;
+
+    /// The run made alone.
+    fn alone(&self) -> Result<RunResult<Self>, SimError> {
+        let (mut run, mut sim) = self.begin()?;
+        drive(&mut run, &mut sim)
+    }
+}
+
+/// What a run of `S` gives.
+pub type RunResult<S> = <<S as RunSpec>::Lane as LaneRun>::Result;
+
+/// One classification run ([`bistable_core::classify_from`]'s arguments).
 #[derive(Debug, Clone, Copy)]
 pub struct Run {
     /// Damping and restitution.
@@ -38,10 +106,15 @@ pub struct Run {
     pub track: Tracking,
 }
 
-impl Run {
-    /// The run made alone.
-    pub fn classify(&self) -> Result<Classification, SimError> {
-        classify_from(
+impl RunSpec for Run {
+    type Lane = ClassifyRun;
+
+    fn setting(&self) -> (Params, SolverOptions) {
+        (self.params, self.opts)
+    }
+
+    fn begin(&self) -> Result<(ClassifyRun, Simulator), SimError> {
+        ClassifyRun::start(
             self.params,
             self.plate,
             self.opts,
@@ -52,29 +125,69 @@ impl Run {
     }
 }
 
-/// An item of a sweep, made of classification runs.
+/// An item of a sweep, made of runs.
 pub trait Task {
+    /// The runs it asks for.
+    type Run: RunSpec;
     /// What the item gives once its runs are done.
     type Output;
 
     /// The runs to make first (numbered from 0 in this order).
-    fn start(&mut self) -> Result<Vec<Run>, SimError>;
+    fn start(&mut self) -> Result<Vec<Self::Run>, SimError>;
 
     /// Takes the result of run `i`; returns further runs to make (numbered on from the runs
     /// asked for so far).
-    fn run_done(&mut self, i: usize, result: Classification) -> Result<Vec<Run>, SimError>;
+    fn run_done(
+        &mut self,
+        i: usize,
+        result: RunResult<Self::Run>,
+    ) -> Result<Vec<Self::Run>, SimError>;
 
     /// The output, once every run asked for is done.
     fn finish(self) -> Self::Output;
 }
 
+/// The task of one run, whose output is the run's result.
+pub struct Single<S: RunSpec> {
+    spec: Option<S>,
+    result: Option<RunResult<S>>,
+}
+
+impl<S: RunSpec> Single<S> {
+    /// The task of making `spec`'s run.
+    pub fn new(spec: S) -> Self {
+        Self {
+            spec: Some(spec),
+            result: None,
+        }
+    }
+}
+
+impl<S: RunSpec> Task for Single<S> {
+    type Run = S;
+    type Output = RunResult<S>;
+
+    fn start(&mut self) -> Result<Vec<S>, SimError> {
+        Ok(self.spec.take().into_iter().collect())
+    }
+
+    fn run_done(&mut self, _: usize, result: RunResult<S>) -> Result<Vec<S>, SimError> {
+        self.result = Some(result);
+        Ok(Vec::new())
+    }
+
+    fn finish(self) -> RunResult<S> {
+        self.result.expect("the run is done")
+    }
+}
+
 /// Makes `task`'s runs one after the other, in the order they are asked for; the first run
 /// that fails ends the task with its error.
 pub fn run_alone<T: Task>(mut task: T) -> Result<T::Output, SimError> {
-    let mut queue: VecDeque<(usize, Run)> = task.start()?.into_iter().enumerate().collect();
+    let mut queue: VecDeque<(usize, T::Run)> = task.start()?.into_iter().enumerate().collect();
     let mut next = queue.len();
     while let Some((i, run)) = queue.pop_front() {
-        let c = run.classify()?;
+        let c = run.alone()?;
         for r in task.run_done(i, c)? {
             queue.push_back((next, r));
             next += 1;
@@ -129,26 +242,26 @@ struct Live<T> {
 }
 
 /// A run waiting for a lane, or in one: its task's slot and its number there.
-struct Job {
+struct Job<S> {
     task: usize,
     index: usize,
-    run: Run,
+    run: S,
 }
 
 /// The runs of one solver setting (damping and options): a batch and the runs waiting for it.
-struct Group {
+struct Group<S: RunSpec> {
     zeta: u64,
     opts: SolverOptions,
     batch: Batch,
-    queue: VecDeque<Job>,
+    queue: VecDeque<Job<S>>,
     /// Per lane: the run in it.
-    lanes: Vec<Option<(usize, usize, ClassifyRun)>>,
+    lanes: Vec<Option<(usize, usize, S::Lane)>>,
 }
 
 /// One thread's share of a sweep.
-struct Worker<T> {
+struct Worker<T: Task> {
     width: Width,
-    groups: Vec<Group>,
+    groups: Vec<Group<T::Run>>,
     tasks: Vec<Option<Live<T>>>,
 }
 
@@ -253,7 +366,7 @@ impl<T: Task> Worker<T> {
     }
 
     /// Queues `runs` for the task in `slot` (finishing it if it has nothing left to do).
-    fn ask(&mut self, slot: usize, runs: Vec<Run>, send: &mut Sink<'_, T::Output>) -> bool {
+    fn ask(&mut self, slot: usize, runs: Vec<T::Run>, send: &mut Sink<'_, T::Output>) -> bool {
         let live = self.tasks[slot].as_mut().expect("live task");
         for run in runs {
             let index = live.asked;
@@ -279,19 +392,17 @@ impl<T: Task> Worker<T> {
                 let Some(job) = self.groups[g].queue.pop_front() else {
                     break;
                 };
-                let r = &job.run;
-                let started = ClassifyRun::start(r.params, r.plate, r.opts, r.co, r.start, r.track)
-                    .and_then(|(run, sim)| {
-                        let target = run.target();
-                        self.groups[g]
-                            .batch
-                            .put(lane, sim, target)
-                            .map_err(|(e, _)| match e {
-                                bistable_core::JoinError::Sim(e) => e,
-                                other => unreachable!("runs are grouped by setting: {other:?}"),
-                            })
-                            .map(|()| run)
-                    });
+                let started = job.run.begin().and_then(|(run, sim)| {
+                    let target = run.target();
+                    self.groups[g]
+                        .batch
+                        .put(lane, sim, target)
+                        .map_err(|(e, _)| match e {
+                            bistable_core::JoinError::Sim(e) => e,
+                            other => unreachable!("runs are grouped by setting: {other:?}"),
+                        })
+                        .map(|()| run)
+                });
                 match started {
                     Ok(run) => self.groups[g].lanes[lane] = Some((job.task, job.index, run)),
                     Err(e) => {
@@ -338,7 +449,7 @@ impl<T: Task> Worker<T> {
         &mut self,
         slot: usize,
         index: usize,
-        result: Result<Classification, SimError>,
+        result: Result<RunResult<T::Run>, SimError>,
         send: &mut Sink<'_, T::Output>,
     ) -> bool {
         let live = self.tasks[slot].as_mut().expect("live task");
@@ -374,12 +485,10 @@ impl<T: Task> Worker<T> {
 }
 
 /// The group for `run`'s setting, made if new.
-fn group_of(groups: &mut Vec<Group>, width: Width, run: &Run) -> usize {
-    let zeta = run.params.zeta().to_bits();
-    if let Some(g) = groups
-        .iter()
-        .position(|g| g.zeta == zeta && g.opts == run.opts)
-    {
+fn group_of<S: RunSpec>(groups: &mut Vec<Group<S>>, width: Width, run: &S) -> usize {
+    let (params, opts) = run.setting();
+    let zeta = params.zeta().to_bits();
+    if let Some(g) = groups.iter().position(|g| g.zeta == zeta && g.opts == opts) {
         return g;
     }
     // Runs of other settings than the first (the tolerance repeats of a suspect point) come a
@@ -389,10 +498,10 @@ fn group_of(groups: &mut Vec<Group>, width: Width, run: &Run) -> usize {
     } else {
         Width::Four.min_with(width)
     };
-    let batch = Batch::new(width, &run.params, run.opts);
+    let batch = Batch::new(width, &params, opts);
     groups.push(Group {
         zeta,
-        opts: run.opts,
+        opts,
         lanes: (0..batch.lanes()).map(|_| None).collect(),
         batch,
         queue: VecDeque::new(),

@@ -328,6 +328,7 @@ impl PointTest {
 }
 
 impl Task for PointTest {
+    type Run = Run;
     type Output = (Classification, Sensitivity);
 
     fn start(&mut self) -> Result<Vec<Run>, SimError> {

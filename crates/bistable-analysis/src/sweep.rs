@@ -83,6 +83,7 @@ struct TimedPoint {
 }
 
 impl Task for TimedPoint {
+    type Run = Run;
     type Output = Classified;
 
     fn start(&mut self) -> Result<Vec<Run>, SimError> {

@@ -13,7 +13,7 @@ use bistable_analysis::orbit::{shoot, summarise};
 use bistable_analysis::Model;
 
 use crate::branches;
-use crate::common::{threads, ModelArgs};
+use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
 use crate::output::{print_json, print_text, CsvFile, Field};
 use crate::plot::{self, header, Area, DrawResult, Mark};
@@ -148,6 +148,12 @@ pub struct OrbitArgs {
     /// Worker threads for --continue-omega [default: all cores].
     #[arg(long, value_name = "N", help_heading = "Continuation")]
     pub threads: Option<usize>,
+
+    /// Seeding runs each thread advances together in SIMD lanes for --continue-omega: 1 (one
+    /// at a time), 4 (AVX2) or 8 (AVX-512) [default: 4]. The results are the same for every
+    /// width.
+    #[arg(long, value_name = "N", help_heading = "Continuation")]
+    pub lanes: Option<usize>,
 
     #[command(flatten)]
     pub model: ModelArgs,
@@ -359,6 +365,7 @@ multiplier_1_im,multiplier_2_re,multiplier_2_im,abs_multiplier,impacts";
 fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
     let range = range.check("--continue-omega", |w| w > 0.0, "Ω must be > 0")?;
     let threads = threads(args.threads, "--threads")?;
+    let width = lanes(args.lanes, "--lanes")?;
     let omegas = range.values();
     let p = args.period;
     let method = if args.arclength {
@@ -373,7 +380,7 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
             .map(|&w| args.model.model(w, v))
             .collect::<Result<Vec<_>, _>>()?;
         let mut bars = StageBars::new(format!(" at V = {v}"));
-        let curves = continue_orbits(&models, p, args.settle, method, threads, &mut |r| {
+        let curves = continue_orbits(&models, p, args.settle, method, threads, width, &mut |r| {
             bars.report(r)
         })?;
         all.push((v, curves));

@@ -1,6 +1,7 @@
 //! The lane width changes nothing but the speed: `map` and `basins` write the same CSV (every
-//! column but the wall time) and the same summary with `--lanes 1` (one trajectory at a time,
-//! the scalar path), 4 (the default) and 8.
+//! column but the wall time), `bifurcation` and `orbit --continue-omega` the same files byte for
+//! byte, and each the same summary with `--lanes 1` (one trajectory at a time, the scalar path),
+//! 4 (the default) and 8.
 
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -128,4 +129,84 @@ fn basins_are_the_same_for_every_lane_width() {
         ],
     );
     assert_eq!(n, 10_000);
+}
+
+/// Runs `args` with each width, writing its files (`--out`, and the orbit CSV beside it) to its
+/// own directory; asserts the same bytes in every file and equal summaries (but for the
+/// timings, the width and the file names); returns the size of the first `--out` file.
+fn same_files_for_every_width(name: &str, args: &[&str], files: &[&str]) -> usize {
+    let dir = scratch(name);
+    let mut first: Option<(Vec<Vec<u8>>, Value)> = None;
+    for lanes in ["1", "4", "8"] {
+        let sub = dir.join(format!("lanes{lanes}"));
+        std::fs::create_dir_all(&sub).unwrap();
+        let out = sub.join(files[0]);
+        let mut a = args.to_vec();
+        a.extend(["--lanes", lanes, "--out", out.to_str().unwrap(), "--json"]);
+        let mut summary = run(&a);
+        summary
+            .as_object_mut()
+            .unwrap()
+            .retain(|k, _| !k.contains("time") && k != "lanes" && k != "files");
+        let bytes: Vec<Vec<u8>> = files
+            .iter()
+            .map(|f| std::fs::read(sub.join(f)).unwrap_or_else(|e| panic!("{f}: {e}")))
+            .collect();
+        match &first {
+            None => first = Some((bytes, summary)),
+            Some((bytes1, summary1)) => {
+                for ((f, b), b1) in files.iter().zip(&bytes).zip(bytes1) {
+                    assert!(b == b1, "--lanes {lanes}: {f} differs");
+                }
+                assert_eq!(&summary, summary1, "--lanes {lanes}: summary differs");
+            }
+        }
+    }
+    first.unwrap().0[0].len()
+}
+
+#[test]
+fn bifurcation_is_the_same_for_every_lane_width() {
+    // 61 points across the period-doubling cascade of the demo's diagram, with the branches
+    // seeded from the recorded attractors.
+    let n = same_files_for_every_width(
+        "bifurcation",
+        &[
+            "bifurcation",
+            "--param",
+            "omega",
+            "--range",
+            "2.0:2.7:61",
+            "--velocity",
+            "0.07",
+            "--transient",
+            "300",
+            "--record",
+            "40",
+            "--threads",
+            "2",
+        ],
+        &["bif.csv", "bif_orbits.csv"],
+    );
+    assert!(n > 61 * 40 * 20, "{n} bytes");
+}
+
+#[test]
+fn orbit_continuation_is_the_same_for_every_lane_width() {
+    let n = same_files_for_every_width(
+        "orbits",
+        &[
+            "orbit",
+            "--continue-omega",
+            "1.2:2.4:25",
+            "--velocity",
+            "0.05",
+            "--settle",
+            "300",
+            "--threads",
+            "2",
+        ],
+        &["orbits.csv"],
+    );
+    assert!(n > 100, "{n} bytes");
 }

@@ -10,7 +10,8 @@ use bistable_analysis::bifurcation::{compute, BifurcationOptions};
 use bistable_analysis::Model;
 
 use crate::common::{
-    check_signals, invalid, invalid_text, model, released, table, threads as threads_arg,
+    check_signals, invalid, invalid_text, lanes as lanes_arg, model, released, table,
+    threads as threads_arg,
 };
 use crate::common::{Col, Stop};
 use crate::common::{MAX_VELOCITY, OMEGA_RANGE};
@@ -22,7 +23,7 @@ const MAX_RECORDED: u64 = 100_000_000;
 /// Bifurcation data along `values` of `param` (see `bistable_impact.bifurcation`).
 #[pyfunction]
 #[pyo3(signature = (param, values, omega=None, velocity=None, transient=500, record=100,
-    samples=128, branch_periods=vec![1, 2, 4, 8], threads=0, zeta=0.02, restitution=0.85,
+    samples=128, branch_periods=vec![1, 2, 4, 8], threads=0, lanes=4, zeta=0.02, restitution=0.85,
     tol=1e-16, chatter="accumulation"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn bifurcation<'py>(
@@ -36,6 +37,7 @@ pub(crate) fn bifurcation<'py>(
     samples: u32,
     branch_periods: Vec<u32>,
     threads: usize,
+    lanes: usize,
     zeta: f64,
     restitution: f64,
     tol: f64,
@@ -118,6 +120,7 @@ pub(crate) fn bifurcation<'py>(
         record,
         samples,
         branch_periods,
+        width: lanes_arg(lanes)?,
     };
     let data = released(
         py,

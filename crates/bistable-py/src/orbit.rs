@@ -12,7 +12,8 @@ use bistable_analysis::orbit::{shoot, summarise};
 use bistable_analysis::Model;
 
 use crate::common::{
-    check_signals, invalid_text, model, released, sim_err, table, threads as threads_arg, Col, Stop,
+    check_signals, invalid_text, lanes as lanes_arg, model, released, sim_err, table,
+    threads as threads_arg, Col, Stop,
 };
 
 /// Checks an orbit period (shaker periods), as the CLI's `--period`.
@@ -213,7 +214,7 @@ fn arc_rows(all: &[(f64, Vec<Vec<ArcPoint>>)]) -> Vec<(&'static str, &'static st
 /// Orbits continued in Ω (see `bistable_impact.continue_omega`).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, period=1, settle=2000, method="natural", threads=0,
-    zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation"))]
+    lanes=4, zeta=0.02, restitution=0.85, tol=1e-16, chatter="accumulation"))]
 #[allow(clippy::too_many_arguments)]
 pub(crate) fn continue_omega<'py>(
     py: Python<'py>,
@@ -223,6 +224,7 @@ pub(crate) fn continue_omega<'py>(
     settle: u32,
     method: &str,
     threads: usize,
+    lanes: usize,
     zeta: f64,
     restitution: f64,
     tol: f64,
@@ -251,6 +253,7 @@ pub(crate) fn continue_omega<'py>(
         ));
     }
     let threads = threads_arg(threads)?;
+    let width = lanes_arg(lanes)?;
     let mut grids: Vec<Vec<Model>> = Vec::new();
     for &v in &velocity {
         let ms = omega
@@ -265,7 +268,7 @@ pub(crate) fn continue_omega<'py>(
             grids
                 .iter()
                 .map(|ms| {
-                    continue_orbits(ms, period, settle, method, threads, &mut |_| {
+                    continue_orbits(ms, period, settle, method, threads, width, &mut |_| {
                         check_signals()
                     })
                 })
