@@ -181,6 +181,18 @@ def test_classify_paper_examples():
     r = bi.classify(0.85, 0.11)
     assert (r["class"], r["period"]) == ("intrawell", 4)
     assert bi.classify(0.85, 0.15)["at_rest_in_second_well"] is True
+    assert bi.classify(0.85, 0.15)["at_rest"] is True
+
+
+def test_a_mass_that_never_leaves_the_plate_is_at_rest(cli):
+    """V = 0: the plate stands still and the mass rests on it; at rest, on the plate
+    (sticking), no impacts, as the CLI says."""
+    r = bi.classify(0.85, 0.0)
+    assert (r["at_rest"], r["sticking"], r["impacts_per_period"]) == (True, True, 0)
+    assert (r["class"], r["final_well"], r["at_rest_in_second_well"]) == ("intrawell", 1, False)
+    assert without_time(r) == without_time(cli_classify(cli, 0.85, 0.0))
+    moving = bi.classify(0.85, 0.01)
+    assert (moving["at_rest"], moving["sticking"]) == (False, False)
 
 
 def test_sweep_map_store_skips_points_already_computed(tmp_path):
