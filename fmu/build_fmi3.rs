@@ -48,6 +48,13 @@ const FMI3_TEXTS: &[(&str, &str, &str)] = &[
         "in external mode (FMI 3.0 has no input derivatives)",
     ),
     (
+        "plate_reconstruction",
+        "external mode without input derivatives: how the plate is rebuilt from the sampled \
+         z_in, zdot_in (input derivatives, when given for a step, take precedence)",
+        "external mode: how the plate is rebuilt from the sampled z_in, zdot_in (FMI 3.0 has \
+         no input derivatives)",
+    ),
+    (
         "PlateReconstruction.taylor",
         "z_in + zdot_in*s (plus any derivatives given)",
         "z_in + zdot_in*s",

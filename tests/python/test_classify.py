@@ -144,6 +144,7 @@ def test_classify_at_the_papers_sensitive_point(cli):
     )
     assert without_time(r) == without_time(expected)  # the CLI's JSON has the same objects
     assert expected["outcomes"] == outcomes
+    assert [list(o) for o in expected["outcomes"]] == [list(o) for o in outcomes]  # key order
 
 
 def test_outcomes_text_is_the_map_csv_form(tmp_path):

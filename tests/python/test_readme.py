@@ -1,9 +1,10 @@
-"""Executable docs: the code blocks of README.md, fmu/README.md and ros/README.md, the CLI
-examples of README.md's command table and the Python docstrings' examples.
+"""Executable docs: the code blocks of README.md, fmu/README.md, ros/README.md and
+crates/bistable-py/README.md, the CLI examples of README.md's command table and the Python
+docstrings' examples.
 
-Every fenced block either runs here (README.md's Python block, as written, in a fresh
-interpreter) or is preceded by an HTML comment `<!-- not run ...: reason -->` that says why not
-(make targets that `make test` runs itself, long-running nodes, installs)."""
+Every fenced block either runs here (the Python blocks, as written, in a fresh interpreter) or
+is preceded by an HTML comment `<!-- not run ...: reason -->` that says why not (make targets
+that `make test` runs itself, long-running nodes, installs)."""
 
 import doctest
 import re
@@ -15,7 +16,9 @@ import pytest
 
 from conftest import ROOT
 
-DOCS = ["README.md", "fmu/README.md", "ros/README.md"]
+DOCS = ["README.md", "fmu/README.md", "ros/README.md", "crates/bistable-py/README.md"]
+#: The documents whose Python blocks test_python_blocks_run_as_written runs.
+PY_DOCS = ["README.md", "crates/bistable-py/README.md"]
 FENCE = re.compile(r"^```(\w*)\n(.*?)^```\n", re.M | re.S)
 NOT_RUN = re.compile(r"<!-- not run[^:]*: (\S.*?) -->\s*$")
 
@@ -31,26 +34,23 @@ def test_every_block_runs_here_or_says_why_not():
     for path in DOCS:
         for lang, code, before in blocks(path):
             seen += 1
-            if path == "README.md" and lang == "python":
-                continue  # run by test_readme_python_block_runs_as_written
+            if lang == "python" and path in PY_DOCS:
+                continue  # run by test_python_blocks_run_as_written
             last = before.rstrip("\n").splitlines()[-1]
             assert NOT_RUN.search(last), (
                 f"{path}: the {lang or 'plain'} block starting {code.splitlines()[0]!r} is "
                 "neither run by tests/python/test_readme.py nor marked "
                 "'<!-- not run by the README test: reason -->'"
             )
-    assert seen >= 7
+    assert seen >= 9
 
 
-def python_blocks():
-    return [code for lang, code, _ in blocks("README.md") if lang == "python"]
-
-
-def test_readme_python_block_runs_as_written(tmp_path):
-    """Each Python block of README.md, unchanged, in a fresh interpreter (no names from
-    elsewhere; the README's sizes are those of this run)."""
-    codes = python_blocks()
-    assert codes, "README.md has no python block"
+@pytest.mark.parametrize("path", PY_DOCS)
+def test_python_blocks_run_as_written(tmp_path, path):
+    """Each Python block, unchanged, in a fresh interpreter (no names from elsewhere; the
+    README's sizes are those of this run)."""
+    codes = [code for lang, code, _ in blocks(path) if lang == "python"]
+    assert codes, f"{path} has no python block"
     for code in codes:
         r = subprocess.run(
             [sys.executable, "-c", code],
@@ -59,7 +59,9 @@ def test_readme_python_block_runs_as_written(tmp_path):
             text=True,
             timeout=120,
         )
-        assert r.returncode == 0, f"README.md's python block failed:\n{r.stderr}"
+        assert r.returncode == 0, f"{path}'s python block failed:\n{r.stderr}"
+    if path != "README.md":
+        return
     # What the block prints is what it says in its comment: the outcomes as a list of dicts.
     assert "[{'class': 'transient_interwell', 'period': 1, 'chaotic': False, 'final_well': 2, " \
         "'count': 5, 'fraction': 0.555" in r.stdout, r.stdout
