@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+if TYPE_CHECKING:  # pandas is optional (the [pandas] extra)
+    import pandas as pd
 
 
 from . import _check as check
@@ -93,7 +96,7 @@ def map(
     horizon: float = _SENS["horizon"],
     repeat_periods: float = _SENS["repeat_periods"],
     lyapunov_windows: int = _SENS["lyapunov_windows"],
-):
+) -> "pd.DataFrame":
     """Classifies every point of the grid ``omega × velocity`` (:func:`bistable_impact.classify`
     at each ``(Ω, V)``) and returns a pandas DataFrame with the CLI map CSV's columns
     (:data:`COLUMNS`), one row per point, ordered with ``velocity`` outer and ``omega`` inner as
@@ -215,7 +218,7 @@ def map(
     return df
 
 
-def to_csv_frame(df):
+def to_csv_frame(df: "pd.DataFrame") -> "pd.DataFrame":
     """A copy of a :func:`map` DataFrame in the form of the map CSV (``bistable map --out``):
     the ``outcomes`` lists as their text ``class:period:well=fraction`` joined by ``;``. Write
     it with ``to_csv(path, index=False)``; :func:`read_csv` reads such a file back."""
@@ -224,7 +227,7 @@ def to_csv_frame(df):
     return out
 
 
-def read_csv(path: str):
+def read_csv(path: Union[str, "os.PathLike[str]"]) -> "pd.DataFrame":
     """A map CSV (``bistable map --out``, a ``store`` of :func:`map`) as the DataFrame
     :func:`map` returns: integer columns as ``Int64`` (empty cells ``<NA>``), flags as
     ``bool``, ``outcomes`` as lists of dicts (:data:`bistable_impact.Outcome`). Raises
