@@ -103,12 +103,13 @@ def test_readme_cli_examples_run_with_small_sizes(cli, tmp_path):
 def test_docstring_examples():
     import bistable_impact as bi
 
-    for module in (bi, bi.sweep):
+    modules = (bi, bi.sweep, bi.analyses)
+    for module in modules:
         result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         assert result.failed == 0, module.__name__
     found = sum(
         len(t.examples)
-        for m in (bi, bi.sweep)
+        for m in modules
         for t in doctest.DocTestFinder().find(m)
     )
-    assert found >= 10
+    assert found >= 14
