@@ -801,7 +801,7 @@ fn map_writes_resumes_and_classifies() {
     assert_eq!(resumed["resumed"].as_u64(), Some(7));
     let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 9);
-    assert!(rows.iter().all(|r| r.len() == 23), "no broken rows");
+    assert!(rows.iter().all(|r| r.len() == 24), "no broken rows");
 
     // No lock is left behind; a lock held by a live process (this test) refuses the run, a
     // stale one (no such process) is taken over.
