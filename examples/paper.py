@@ -138,7 +138,7 @@ def fig9(out: str, sizes: Sizes, client: Any = None) -> None:
     omegas = bi.linspace(*FIG9_OMEGA, nw)
     velocities = bi.linspace(*FIG9_VELOCITY, nv)
     df = bi.sweep.map(omegas, velocities, client=client, max_periods=sizes.map_max_periods)
-    df.to_csv(os.path.join(out, "fig9_map.csv"), index=False)
+    bi.sweep.to_csv_frame(df).to_csv(os.path.join(out, "fig9_map.csv"), index=False)  # the CLI CSV form
     code = df["class"].map({c: i for i, c in enumerate(CLASSES)}).to_numpy().reshape(nv, nw)
     fig, ax = plt.subplots(figsize=(9, 6))
     dw, dv = (omegas[1] - omegas[0]) / 2, (velocities[1] - velocities[0]) / 2

@@ -17,6 +17,76 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
+/// The FMI 3.0 texts of descriptions that speak of FMI 2.0: `(key, FMI 2.0 part, FMI 3.0
+/// part)`, the key a variable's name, `Type.item` for an enumeration item or `Type` for a type.
+/// The FMI 2.0 part must be in the description (a changed source fails the build), and no
+/// FMI 3.0 description may name FMI 2.0 functions (`fmi2...`) or speak of input derivatives,
+/// which FMI 3.0 does not have.
+const FMI3_TEXTS: &[(&str, &str, &str)] = &[
+    (
+        "z_in",
+        "(FMI 2.0 co-simulation: derivatives of order 2..5 through fmi2SetRealInputDerivatives \
+         extend the plate polynomial over the step; order 1 is zdot_in)",
+        "(FMI 3.0 has no input derivatives: between communication points the plate follows \
+         the samples as plate_reconstruction says)",
+    ),
+    (
+        "zdot_in",
+        "(FMI 2.0 co-simulation: its derivatives of order 1..4 are plate derivatives of order \
+         2..5)",
+        "(FMI 3.0 has no input derivatives: between communication points the plate follows \
+         the samples as plate_reconstruction says)",
+    ),
+    (
+        "ShakerMode.external",
+        "the inputs z_in, zdot_in and their derivatives",
+        "the inputs z_in, zdot_in",
+    ),
+    (
+        "PlateReconstruction",
+        "in external mode when the host gives no input derivatives",
+        "in external mode (FMI 3.0 has no input derivatives)",
+    ),
+    (
+        "plate_reconstruction",
+        "external mode without input derivatives: how the plate is rebuilt from the sampled \
+         z_in, zdot_in (input derivatives, when given for a step, take precedence)",
+        "external mode: how the plate is rebuilt from the sampled z_in, zdot_in (FMI 3.0 has \
+         no input derivatives)",
+    ),
+    (
+        "PlateReconstruction.taylor",
+        "z_in + zdot_in*s (plus any derivatives given)",
+        "z_in + zdot_in*s",
+    ),
+];
+
+/// ` description="..."` of `node` (none without one) with its FMI 3.0 text ([`FMI3_TEXTS`]).
+fn description3(node: Node, key: &str) -> Result<String, String> {
+    let Some(text) = node.attribute("description") else {
+        return Ok(String::new());
+    };
+    let mut text = text.to_string();
+    for &(k, two, three) in FMI3_TEXTS.iter().filter(|e| e.0 == key) {
+        if !text.contains(two) {
+            return Err(format!(
+                "{k}: its FMI 3.0 text in build_fmi3.rs replaces '{two}', which its description \
+                 no longer has"
+            ));
+        }
+        text = text.replace(two, three);
+    }
+    let lower = text.to_lowercase();
+    if lower.contains("fmi2") || (lower.contains("input derivative") && !lower.contains("no input"))
+    {
+        return Err(format!(
+            "{key}: the description speaks of FMI 2.0 ('{text}'); give its FMI 3.0 text in \
+             FMI3_TEXTS (build_fmi3.rs)"
+        ));
+    }
+    Ok(format!(" description=\"{}\"", esc(&text)))
+}
+
 /// ` name="value"` for each attribute of `node` in `names` that is present, renamed by `map`.
 fn copy_attrs(node: Node, names: &[(&str, &str)]) -> String {
     let mut out = String::new();
@@ -148,24 +218,21 @@ pub fn generate(text: &str) -> Result<String, String> {
                     t.attribute("name").unwrap_or_default()
                 )
             })?;
+            let type_name = t.attribute("name").unwrap_or_default();
             writeln!(
                 out,
-                "    <EnumerationType{}>",
-                copy_attrs(t, &[("name", "name"), ("description", "description")])
+                "    <EnumerationType{}{}>",
+                copy_attrs(t, &[("name", "name")]),
+                description3(t, type_name)?
             )
             .unwrap();
             for item in e.children().filter(|n| n.has_tag_name("Item")) {
+                let key = format!("{type_name}.{}", item.attribute("name").unwrap_or_default());
                 writeln!(
                     out,
-                    "      <Item{}/>",
-                    copy_attrs(
-                        item,
-                        &[
-                            ("name", "name"),
-                            ("value", "value"),
-                            ("description", "description")
-                        ]
-                    )
+                    "      <Item{}{}/>",
+                    copy_attrs(item, &[("name", "name"), ("value", "value")]),
+                    description3(item, &key)?
                 )
                 .unwrap();
             }
@@ -210,10 +277,12 @@ pub fn generate(text: &str) -> Result<String, String> {
         };
         let mut attrs = copy_attrs(
             *v,
+            &[("name", "name"), ("valueReference", "valueReference")],
+        );
+        attrs += &description3(*v, v.attribute("name").unwrap_or_default())?;
+        attrs += &copy_attrs(
+            *v,
             &[
-                ("name", "name"),
-                ("valueReference", "valueReference"),
-                ("description", "description"),
                 ("causality", "causality"),
                 ("variability", "variability"),
                 ("initial", "initial"),

@@ -68,7 +68,8 @@ def test_cvode_finds_the_co_simulation_impacts(fmu_path, name):
     error = np.abs(t_me - t_cs)
     worst = int(np.argmax(error / tol))
     assert np.all(error <= tol), (
-        f"impact {worst}: |t_ME - t_CS| = {error[worst]:.3e} s > tolerance {tol[worst]:.3e} s")
+        f"impact {worst}: |τ_ME - τ_CS| = {error[worst]:.3e} > tolerance {tol[worst]:.3e} "
+        "(nondimensional time τ)")
     # The solver's error, not the model, limits the agreement: it shrinks with rtol.
     assert np.abs(t_fine - t_cs).max() < 0.1 * error.max()
 

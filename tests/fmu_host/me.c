@@ -1,5 +1,5 @@
 /* `host test`, Model Exchange part: an ME driver with its own event loop (fixed-step RK4, every
- * sign change of an event indicator bisected to 1e-12 s, the time event of a chatter tail
+ * sign change of an event indicator bisected to 1e-12 in τ, the time event of a chatter tail
  * honoured, fmi2EnterEventMode / fmi2NewDiscreteStates / fmi2EnterContinuousTimeMode), run
  * against the co-simulation interface's impacts; and scripted illegal Model Exchange calls. */
 #include "host.h"
@@ -123,7 +123,7 @@ static int impacts(fmi2Type kind, double omega, double v, double t_end, double h
 /* The ME driver finds the co-simulation impacts. RK4's error is O(h^4): the error of each
  * impact time at step h is estimated from a run at h/2 as |t(h) - t(h/2)| * 16/15 (Richardson);
  * tolerance 2x that plus 2 % of the largest estimate (the finer run's own error, 1/16) plus
- * 1e-11 s (bisection to 1e-12 s and the co-simulation's ~1e-13). */
+ * 1e-11 in τ (bisection to 1e-12 and the co-simulation's ~1e-13). */
 static void me_against_cs(const char *name, double omega, double v, double t_end, double h) {
     static double cs[MAX_IMPACTS], me[MAX_IMPACTS], fine[MAX_IMPACTS];
     int n_cs = impacts(fmi2CoSimulation, omega, v, t_end, 0, cs);
@@ -143,10 +143,11 @@ static void me_against_cs(const char *name, double omega, double v, double t_end
         max_err = fmax(max_err, err);
         if (err > tol && bad < 0) bad = k, worst = tol;
     }
-    printf("me: %s: %d impacts, max |t_ME - t_CS| = %.2e s, max error estimate %.2e s\n", name,
-           n_cs, max_err, max_est);
+    /* Times are the model's nondimensional τ = ω0·t (omega0 = 1 rad/s: the FMU's seconds are τ). */
+    printf("me: %s: %d impacts, max |τ_ME - τ_CS| = %.2e, max error estimate %.2e (nondimensional "
+           "time τ)\n", name, n_cs, max_err, max_est);
     snprintf(what, sizeof what, "%s: every ME impact time within its derived tolerance (first "
-             "violation: impact %d, tolerance %.2e s)", name, bad, worst);
+             "violation: impact %d, tolerance %.2e in τ)", name, bad, worst);
     hcheck(bad < 0, what);
 }
 

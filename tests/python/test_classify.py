@@ -121,8 +121,19 @@ def test_classify_at_the_papers_sensitive_point(cli):
     """(0.85, 0.13): rounding decides between rest in well 2 and continuous interwell P-1."""
     r = bi.classify(0.85, 0.13)
     assert r["sensitive"] is True
-    shown = {o.split("=")[0] for o in r["outcomes"].split(";")}
-    assert shown == {"transient_interwell:P-1:2", "continuous_interwell:P-1:-"}, r["outcomes"]
+    outcomes = r["outcomes"]
+    assert isinstance(outcomes, list) and all(isinstance(o, dict) for o in outcomes)
+    assert [list(o) for o in outcomes] == [
+        ["class", "period", "chaotic", "final_well", "count", "fraction"]
+    ] * len(outcomes)
+    shown = {(o["class"], o["period"], o["chaotic"], o["final_well"]) for o in outcomes}
+    assert shown == {
+        ("transient_interwell", 1, False, 2),
+        ("continuous_interwell", 1, False, None),
+    }, outcomes
+    assert sum(o["count"] for o in outcomes) == r["runs"]
+    assert [o["fraction"] for o in outcomes] == [o["count"] / r["runs"] for o in outcomes]
+    assert outcomes[0]["fraction"] == r["majority_fraction"] and outcomes[0]["class"] == r["class"]
     expected = json.loads(
         subprocess.run(
             [str(cli), "classify", "--omega", "0.85", "--velocity", "0.13"],
@@ -131,13 +142,58 @@ def test_classify_at_the_papers_sensitive_point(cli):
             text=True,
         ).stdout
     )
-    assert without_time(r) == without_time(expected)
+    assert without_time(r) == without_time(expected)  # the CLI's JSON has the same objects
+    assert expected["outcomes"] == outcomes
+    assert [list(o) for o in expected["outcomes"]] == [list(o) for o in outcomes]  # key order
+
+
+def test_outcomes_text_is_the_map_csv_form(tmp_path):
+    """sweep.map: outcomes as lists of dicts in the DataFrame, as text in the CSV (store=,
+    to_csv_frame), read back by read_csv into the same lists."""
+    pd = pytest.importorskip("pandas")
+    store = tmp_path / "map.csv"
+    df = bi.sweep.map([0.85], [0.13], store=str(store), max_periods=2000.0)
+    got = df["outcomes"][0]
+    assert isinstance(got, list) and {o["class"] for o in got} == {
+        "transient_interwell", "continuous_interwell"}
+    assert df["runs"].dtype == "Int64" and df["sensitive"].dtype == bool
+    text = pd.read_csv(store)["outcomes"][0]
+    assert text == bi._native.outcomes_text(got)
+    assert text.startswith("transient_interwell:P-1:2=0.") and ";continuous_interwell:P-1:-=0." in text
+    back = bi.sweep.read_csv(store)
+    assert back["outcomes"][0] == got
+    assert bi.sweep.to_csv_frame(df)["outcomes"][0] == text
+    # The store is read back into lists too (not recomputed: same wall time).
+    again = bi.sweep.map([0.85], [0.13], store=str(store), max_periods=2000.0)
+    assert again["outcomes"][0] == got and again["wall_time_s"][0] == df["wall_time_s"][0]
+    for bad in ("intrawell:P-1:1", "sideways:P-1:1=1.000", "intrawell:P-1:7=1.000"):
+        with pytest.raises(ValueError, match="'outcomes'"):
+            bi._native.outcomes_from_text(bad, 1)
+    broken = tmp_path / "broken.csv"
+    broken.write_text(store.read_text().replace("transient_interwell:P-1:2=", "x:P-1:2="))
+    with pytest.raises(ValueError, match="'outcomes'"):
+        bi.sweep.read_csv(broken)
+    (tmp_path / "other.csv").write_text("a,b\n1,2\n")
+    with pytest.raises(ValueError, match="map columns"):
+        bi.sweep.read_csv(tmp_path / "other.csv")
 
 
 def test_classify_paper_examples():
     r = bi.classify(0.85, 0.11)
     assert (r["class"], r["period"]) == ("intrawell", 4)
     assert bi.classify(0.85, 0.15)["at_rest_in_second_well"] is True
+    assert bi.classify(0.85, 0.15)["at_rest"] is True
+
+
+def test_a_mass_that_never_leaves_the_plate_is_at_rest(cli):
+    """V = 0: the plate stands still and the mass rests on it; at rest, on the plate
+    (sticking), no impacts, as the CLI says."""
+    r = bi.classify(0.85, 0.0)
+    assert (r["at_rest"], r["sticking"], r["impacts_per_period"]) == (True, True, 0)
+    assert (r["class"], r["final_well"], r["at_rest_in_second_well"]) == ("intrawell", 1, False)
+    assert without_time(r) == without_time(cli_classify(cli, 0.85, 0.0))
+    moving = bi.classify(0.85, 0.01)
+    assert (moving["at_rest"], moving["sticking"]) == (False, False)
 
 
 def test_sweep_map_store_skips_points_already_computed(tmp_path):

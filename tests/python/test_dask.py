@@ -31,7 +31,7 @@ def cli_map(cli, tmp_path, w, v, options=("--max-periods", "2000", "--full")):
          "--lyapunov-periods", "50", "--threads", "2", "--out", str(out)],
         check=True, capture_output=True,
     )  # fmt: skip
-    return pd.read_csv(out)
+    return bi.sweep.read_csv(out)
 
 
 def assert_same_map(df, ref):
@@ -85,7 +85,7 @@ def test_map_with_a_worker_killed_mid_sweep_equals_the_cli(cli, tmp_path):
     assert len(calls) == 20 and calls[-1] == 40 and calls == sorted(set(calls))
     assert len(df) == 40
     assert_same_map(df, ref)
-    assert_same_map(pd.read_csv(store), ref)
+    assert_same_map(bi.sweep.read_csv(store), ref)
 
 
 def test_resumed_sweep_computes_only_the_missing_chunks(tmp_path):

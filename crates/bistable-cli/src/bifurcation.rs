@@ -390,6 +390,10 @@ pub fn period_colour(p: u32) -> RGBColor {
 }
 
 const DOTS: RGBColor = RGBColor(20, 20, 20);
+/// Responses beyond the top of the axis (drawn at its edge).
+const ABOVE: RGBColor = RGBColor(200, 30, 120);
+/// The barrier line x = 1/2.
+const BARRIER: RGBColor = RGBColor(90, 90, 90);
 
 fn draw(
     root: &Area<'_>,
@@ -423,6 +427,66 @@ fn draw(
             format!("P-{} unstable", b.period),
         ));
     }
+    // The top panel's range: the responses and orbit branches, without the few points far
+    // above the rest (e.g. at rest in well 2, x = 1), drawn as markers at the top edge.
+    let (x0, x1) = plot::range(xs.iter().copied(), 0.01);
+    let orbit_max = branches
+        .iter()
+        .flat_map(|b| b.slots.iter().flatten())
+        .flat_map(|o| o.cycle_max.iter().copied());
+    let groups: Vec<Vec<f64>> = points.iter().map(|c| c.max_x.clone()).collect();
+    let (lo, _) = plot::range(
+        points
+            .iter()
+            .flat_map(|c| c.max_x.iter().copied())
+            .chain(orbit_max.clone()),
+        0.0,
+    );
+    let cut = plot::trimmed_top(&groups, lo);
+    let (y0, mut y1) = plot::range(
+        points
+            .iter()
+            .flat_map(|c| c.max_x.iter().copied())
+            .chain(orbit_max)
+            .filter(|&y| cut.is_none_or(|c| y <= c)),
+        0.05,
+    );
+    let above: Vec<(f64, f64)> = match cut {
+        Some(c) => {
+            y1 = y1.max(c + 0.12 * (c - y0));
+            xs.iter()
+                .zip(points)
+                .filter_map(|(&x, p)| {
+                    let top = p.max_x.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+                    (top > y1).then_some((x, top))
+                })
+                .collect()
+        }
+        None => Vec::new(),
+    };
+    if !above.is_empty() {
+        let (lo_a, hi_a) = above
+            .iter()
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |a, p| {
+                (a.0.min(p.1), a.1.max(p.1))
+            });
+        let values = if hi_a - lo_a < 5e-3 {
+            format!("{hi_a:.3}")
+        } else {
+            format!("{lo_a:.3} to {hi_a:.3}")
+        };
+        legend.push((
+            Mark::Dot(ABOVE, 5),
+            format!(
+                "{} beyond the top of the axis (max x {values}), drawn at its edge",
+                plot::plural(above.len() as u64, "point")
+            ),
+        ));
+    }
+    let barrier = y0 < 0.5 && y1 > 0.5;
+    if barrier {
+        legend.push((Mark::Dashed(BARRIER), "barrier x = ½".to_string()));
+    }
     let area = header(
         root,
         &format!(
@@ -441,16 +505,6 @@ fn draw(
     )?;
     let (_, h) = area.dim_in_pixel();
     let (upper, lower) = area.split_vertically(h * 58 / 100);
-    let (x0, x1) = plot::range(xs.iter().copied(), 0.01);
-    let (y0, y1) = plot::range(
-        points.iter().flat_map(|c| c.max_x.iter().copied()).chain(
-            branches
-                .iter()
-                .flat_map(|b| b.slots.iter().flatten())
-                .flat_map(|o| o.cycle_max.iter().copied()),
-        ),
-        0.05,
-    );
     let mut chart = plot::chart(
         &upper,
         (x0, x1),
@@ -459,14 +513,21 @@ fn draw(
         "max x per shaker cycle (units of Δx)",
         Some("largest displacement in each recorded shaker cycle"),
     )?;
-    if y0 < 0.5 && y1 > 0.5 {
-        plot::hline(&mut chart, 0.5, RGBColor(90, 90, 90))?;
+    if barrier {
+        plot::hline(&mut chart, 0.5, BARRIER)?;
     }
+    let edge = y1 - 0.02 * (y1 - y0);
+    chart.draw_series(
+        above
+            .iter()
+            .map(|&(x, _)| Circle::new((x, edge), 5, ABOVE.filled())),
+    )?;
     dots(
         &mut chart,
         xs.iter()
             .zip(points)
-            .flat_map(|(&x, c)| c.max_x.iter().map(move |&y| (x, y))),
+            .flat_map(|(&x, c)| c.max_x.iter().map(move |&y| (x, y)))
+            .filter(|&(_, y)| y <= y1),
     )?;
     for b in branches {
         branches::draw(&mut chart, b, xs, period_colour(b.period))?;

@@ -54,11 +54,16 @@ Always prints one JSON object (--json is accepted and changes nothing):
   at_rest_in_second_well, impacts_per_period, sticking, periods_simulated
   (natural periods τ/2π), stopped_early, wall_time_s, the inputs omega,
   velocity, zeta, restitution; sensitive, runs (verdicts counted),
-  majority_fraction, outcomes (every distinct outcome with its share, most
-  frequent first: class:period:well=share joined by ';', period P-n, chaotic or
-  aperiodic, well - for continuous interwell), sensitivity_trigger (none |
+  majority_fraction, outcomes (every distinct outcome, most frequent first, as
+  objects {class, period (null when aperiodic), chaotic, final_well (null for
+  continuous interwell), count (runs that reached it), fraction (count/runs)};
+  the map CSV writes them as text, class:period:well=fraction joined by ';'),
+  sensitivity_trigger (none |
   growth | late | aperiodic), efoldings (transient growth, capped at the
-  threshold) and efoldings_threshold. The same keys as the map CSV columns.";
+  threshold) and efoldings_threshold; at_rest: the steady state is the mass at
+  rest, at the second equilibrium (at_rest_in_second_well) or on the plate
+  without ever leaving it (no flight, e.g. V = 0: class intrawell, period 1,
+  no impacts, sticking). The same keys as the map CSV columns.";
 
 /// Shown after the options by `bistable classify --help`.
 pub const AFTER_HELP: &str = "\
@@ -67,6 +72,7 @@ Exit codes: 0 success; 2 invalid options; 1 the simulation failed.
 Examples:
   bistable classify --omega 0.85 --velocity 0.11     # intrawell, period 4
   bistable classify --omega 0.85 --velocity 0.15     # at rest in well 2
+  bistable classify --omega 0.85 --velocity 0        # at rest on the still plate
   bistable classify --omega 2.45 --velocity 0.07     # chaotic (not sensitive)
   bistable classify --omega 0.85 --velocity 0.13     # sensitive: rest in well 2
                                                      # or continuous interwell P-1
@@ -168,8 +174,8 @@ pub struct ClassifyCmdArgs {
     pub classify: ClassifyArgs,
 }
 
+use bistable_analysis::record::{parse_outcomes, OutcomeShare, Value, CLASSES};
 pub use bistable_analysis::record::{Record, COLUMNS as CSV_COLUMNS};
-use bistable_analysis::record::{Value, CLASSES};
 
 /// A [`Record`] as the JSON object `classify` prints (keys and order of [`CSV_COLUMNS`]).
 pub struct Json<'a>(pub &'a Record);
@@ -185,8 +191,31 @@ impl Serialize for Json<'_> {
                 Value::Bool(b) => m.serialize_entry(k, &b)?,
                 Value::S(t) => m.serialize_entry(k, t)?,
                 Value::Null => m.serialize_entry(k, &None::<u8>)?,
+                Value::Outcomes(list, _) => {
+                    let list: Vec<OutcomeJson<'_>> = list.iter().map(OutcomeJson).collect();
+                    m.serialize_entry(k, &list)?
+                }
             }
         }
+        m.end()
+    }
+}
+
+/// An [`OutcomeShare`] as a JSON object (keys of [`OutcomeShare::FIELDS`]).
+struct OutcomeJson<'a>(&'a OutcomeShare);
+
+impl Serialize for OutcomeJson<'_> {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeMap;
+        let o = self.0;
+        let [class, period, chaotic, final_well, count, fraction] = OutcomeShare::FIELDS;
+        let mut m = s.serialize_map(Some(OutcomeShare::FIELDS.len()))?;
+        m.serialize_entry(class, &o.class)?;
+        m.serialize_entry(period, &o.period)?;
+        m.serialize_entry(chaotic, &o.chaotic)?;
+        m.serialize_entry(final_well, &o.final_well)?;
+        m.serialize_entry(count, &o.count)?;
+        m.serialize_entry(fraction, &o.fraction)?;
         m.end()
     }
 }
@@ -194,19 +223,20 @@ impl Serialize for Json<'_> {
 /// The CSV form of a [`Record`] (one row of `bistable map`).
 pub trait RecordCsv: Sized {
     /// The CSV fields, in the order of [`CSV_COLUMNS`].
-    fn fields(&self) -> [Field<'_>; 23];
+    fn fields(&self) -> [Field<'_>; 24];
     /// Parses a CSV row written with [`RecordCsv::fields`] (columns as in [`CSV_COLUMNS`]).
     fn from_csv(cells: &[&str]) -> Result<Self, String>;
 }
 
 impl RecordCsv for Record {
-    fn fields(&self) -> [Field<'_>; 23] {
+    fn fields(&self) -> [Field<'_>; 24] {
         self.values().map(|v| match v {
             Value::F(x) => Field::F(x),
             Value::I(n) => Field::I(n),
             Value::Bool(b) => Field::flag(b),
             Value::S(t) => Field::S(t),
             Value::Null => Field::Empty,
+            Value::Outcomes(_, text) => Field::S(text),
         })
     }
 
@@ -254,10 +284,12 @@ impl RecordCsv for Record {
             sensitive: parse(cells, 16)?,
             runs: parse(cells, 17)?,
             majority_fraction: parse(cells, 18)?,
-            outcomes: cells[19].to_string(),
+            outcomes: parse_outcomes(cells[19], parse(cells, 17)?)?,
+            outcomes_text: cells[19].to_string(),
             sensitivity_trigger: cells[20].to_string(),
             efoldings: opt(cells, 21)?,
             efoldings_threshold: opt(cells, 22)?,
+            at_rest: parse(cells, 23)?,
         })
     }
 }
@@ -299,10 +331,17 @@ mod tests {
             sensitive: true,
             runs: 9,
             majority_fraction: 7.0 / 9.0,
-            outcomes: "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222".into(),
+            outcomes: parse_outcomes(
+                "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222",
+                9,
+            )
+            .unwrap(),
+            outcomes_text: "transient_interwell:P-1:2=0.778;continuous_interwell:P-1:-=0.222"
+                .into(),
             sensitivity_trigger: "growth".into(),
             efoldings: Some(20.0),
             efoldings_threshold: Some(20.0),
+            at_rest: false,
         };
         let mut line = String::new();
         push_fields(&mut line, &r.fields());

@@ -12,7 +12,7 @@ use bistable_analysis::energy::{self, grazing, neutral, EnergyMap, ImpactPoint};
 use crate::common::{positive, ModelArgs};
 use crate::error::CliError;
 use crate::output::print_text;
-use crate::plot::{self, header, Area, DrawResult, Mark, FONT};
+use crate::plot::{self, header, Area, DrawResult, Mark};
 
 const TAU: f64 = std::f64::consts::TAU;
 
@@ -153,6 +153,8 @@ fn diverging(t: f64) -> RGBColor {
 
 const NEUTRAL: RGBColor = RGBColor(0, 0, 0);
 const GRAZING: RGBColor = RGBColor(0, 140, 60);
+/// The overlaid impacts: dark dots with a white rim, visible on red, white and blue.
+const IMPACT: RGBColor = RGBColor(25, 25, 25);
 
 fn draw(
     root: &Area<'_>,
@@ -176,7 +178,7 @@ fn draw(
         ),
     ];
     if let Some(label) = overlay {
-        legend.push((Mark::Dot(RGBColor(215, 50, 70), 4), label.to_string()));
+        legend.push((Mark::Dot(IMPACT, 4), label.to_string()));
     }
     let area = header(
         root,
@@ -244,50 +246,32 @@ fn draw(
         plot::thick_line(&mut chart, &piece, GRAZING, 3)?;
     }
     let r = if impacts.len() > 3000 { 2 } else { 3 };
-    chart.draw_series(
-        impacts
-            .iter()
-            .filter(|i| i.u >= lo && i.u <= hi)
-            .map(|i| Circle::new((i.phase, i.u), r, plot::ramp(i.time_fraction).filled())),
-    )?;
+    let shown = || impacts.iter().filter(|i| i.u >= lo && i.u <= hi);
+    chart.draw_series(shown().map(|i| Circle::new((i.phase, i.u), r + 1, WHITE.filled())))?;
+    chart.draw_series(shown().map(|i| Circle::new((i.phase, i.u), r, IMPACT.filled())))?;
     colour_bar(&right, vmax, scale)
 }
 
-/// A vertical colour bar with ticks at round values of ΔK/ΔK0.
+/// The colour bar of ΔK/ΔK0: ticks at round values, on the asinh scale of the colours.
 fn colour_bar(area: &Area<'_>, vmax: f64, scale: f64) -> DrawResult {
-    let (_, h) = area.dim_in_pixel();
-    let (top, bottom) = (40i32, h as i32 - 80);
-    let (x0, x1) = (20i32, 48i32);
-    let y_of = |t: f64| bottom - ((t + 1.0) * 0.5 * f64::from(bottom - top)).round() as i32;
-    for y in top..=bottom {
-        let t = 2.0 * f64::from(bottom - y) / f64::from(bottom - top) - 1.0;
-        area.draw(&Rectangle::new(
-            [(x0, y), (x1, y + 1)],
-            diverging(t).filled(),
-        ))?;
-    }
-    area.draw(&Rectangle::new(
-        [(x0, top), (x1, bottom)],
-        RGBColor(60, 60, 60).stroke_width(1),
-    ))?;
-    let style = plot::left((FONT, 15).into_font().color(&BLACK));
-    for v in [
-        -100.0, -50.0, -20.0, -10.0, -5.0, -2.0, -1.0, 0.0, 1.0, 2.0, 5.0, 10.0, 20.0, 50.0,
-    ] {
-        if v != 0.0 && f64::abs(v) > vmax {
-            continue;
-        }
-        let y = y_of(compress(v) / scale);
-        area.draw(&PathElement::new(
-            [(x1, y), (x1 + 6, y)],
-            BLACK.stroke_width(1),
-        ))?;
-        area.draw(&Text::new(plot::tick(&v), (x1 + 10, y), style.clone()))?;
-    }
-    area.draw(&Text::new(
-        "ΔK/ΔK0",
-        (x0 - 4, top - 20),
-        plot::left((FONT, 17).into_font().color(&BLACK)),
-    ))?;
-    Ok(())
+    let ticks: Vec<(f64, String)> = [
+        -100.0, -50.0, -20.0, -10.0, -5.0, -2.0, -1.0, -0.5, 0.0, 0.5, 1.0, 2.0, 5.0, 10.0, 20.0,
+        50.0,
+    ]
+    .into_iter()
+    .filter(|v: &f64| *v == 0.0 || v.abs() <= vmax)
+    .map(|v| (0.5 * (compress(v) / scale + 1.0), plot::tick(&v)))
+    .collect();
+    plot::colour_bar(
+        area,
+        |s| diverging(2.0 * s - 1.0),
+        &ticks,
+        &["ΔK/ΔK0"],
+        &[
+            "asinh scale:",
+            "asinh(2·ΔK/ΔK0),",
+            "linear within ±0.5,",
+            "logarithmic beyond",
+        ],
+    )
 }

@@ -54,9 +54,12 @@ CSV (--out): header and one row per point, in completion order:
   omega,velocity,zeta,restitution,class,period,chaotic,lyapunov,snap_throughs,
   final_well,at_rest_in_second_well,impacts_per_period,sticking,
   periods_simulated,stopped_early,wall_time_s,sensitive,runs,majority_fraction,
-  outcomes,sensitivity_trigger,efoldings,efoldings_threshold
+  outcomes,sensitivity_trigger,efoldings,efoldings_threshold,at_rest
   (the keys of 'bistable classify'; empty period, lyapunov,
-  impacts_per_period, efoldings, efoldings_threshold mean null).
+  impacts_per_period, efoldings, efoldings_threshold mean null; outcomes, a
+  list of objects in the JSON, is text here: class:period:well=fraction
+  joined by ';', period P-n, chaotic or aperiodic, well - for continuous
+  interwell, fraction to 3 decimals).
 
 PNG (--plot): the paper's colour logic. Hue by the number of snap-throughs over
 the whole run: blue none, green one, orange several; shade by steady-state

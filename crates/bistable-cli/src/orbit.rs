@@ -506,6 +506,29 @@ const SERIES: [RGBColor; 8] = [
     RGBColor(230, 60, 160),
 ];
 
+/// The barrier line x = 1/2.
+const BARRIER: RGBColor = RGBColor(90, 90, 90);
+
+/// The largest displacements of the orbits drawn (those of arclength traces within `Ω` range).
+fn orbit_maxima(all: &[(f64, Curves)], (x0, x1): (f64, f64)) -> impl Iterator<Item = f64> + '_ {
+    all.iter().flat_map(move |(_, c)| -> Vec<f64> {
+        match c {
+            Curves::Natural(b) => b
+                .slots
+                .iter()
+                .flatten()
+                .flat_map(|o| o.cycle_max.iter().copied())
+                .collect(),
+            Curves::Arclength(t) => t
+                .iter()
+                .flatten()
+                .filter(|p| p.omega >= x0 && p.omega <= x1)
+                .map(|p| p.max_x)
+                .collect(),
+        }
+    })
+}
+
 fn draw(
     root: &Area<'_>,
     model: &Model,
@@ -521,6 +544,12 @@ fn draw(
         .collect();
     legend.push((Mark::Line(RGBColor(60, 60, 60), 3), "stable".to_string()));
     legend.push((Mark::Dashed(RGBColor(60, 60, 60)), "unstable".to_string()));
+    let (x0, x1) = plot::range(omegas.iter().copied(), 0.01);
+    let (y0, y1) = plot::range(orbit_maxima(all, (x0, x1)).chain([0.0]), 0.05);
+    let barrier = y0 < 0.5 && y1 > 0.5;
+    if barrier {
+        legend.push((Mark::Dashed(BARRIER), "barrier x = ½".to_string()));
+    }
     let area = header(
         root,
         &format!(
@@ -538,24 +567,6 @@ fn draw(
         ),
         &legend,
     )?;
-    let (x0, x1) = plot::range(omegas.iter().copied(), 0.01);
-    let ys = all.iter().flat_map(|(_, c)| -> Vec<f64> {
-        match c {
-            Curves::Natural(b) => b
-                .slots
-                .iter()
-                .flatten()
-                .flat_map(|o| o.cycle_max.iter().copied())
-                .collect(),
-            Curves::Arclength(t) => t
-                .iter()
-                .flatten()
-                .filter(|p| p.omega >= x0 && p.omega <= x1)
-                .map(|p| p.max_x)
-                .collect(),
-        }
-    });
-    let (y0, y1) = plot::range(ys.chain([0.0]), 0.05);
     let mut chart = plot::chart(
         &area,
         (x0, x1),
@@ -564,8 +575,8 @@ fn draw(
         "max displacement x_max of the orbit (units of Δx)",
         None,
     )?;
-    if y0 < 0.5 && y1 > 0.5 {
-        plot::hline(&mut chart, 0.5, RGBColor(90, 90, 90))?;
+    if barrier {
+        plot::hline(&mut chart, 0.5, BARRIER)?;
     }
     for (k, (_, c)) in all.iter().enumerate() {
         let colour = SERIES[k % SERIES.len()];

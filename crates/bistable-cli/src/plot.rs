@@ -206,6 +206,77 @@ pub(crate) fn range(values: impl Iterator<Item = f64>, margin: f64) -> (f64, f64
     (lo - margin * span, hi + margin * span)
 }
 
+/// The upper end of a y axis for `groups` (the values drawn at each x) that keeps the data
+/// readable when a few groups lie far above the rest: when leaving out the highest values of at
+/// most `max(1, groups/20)` groups shrinks the span from `lo` to less than half, the largest
+/// value of the others (else the largest of all). `None` when nothing is left out.
+pub(crate) fn trimmed_top(groups: &[Vec<f64>], lo: f64) -> Option<f64> {
+    let mut tops: Vec<f64> = groups
+        .iter()
+        .filter_map(|g| {
+            g.iter()
+                .copied()
+                .filter(|v| v.is_finite())
+                .fold(None, |a: Option<f64>, v| Some(a.map_or(v, |a| a.max(v))))
+        })
+        .collect();
+    tops.sort_by(|a, b| b.total_cmp(a));
+    let all = *tops.first()?;
+    let most = (tops.len() / 20).max(1);
+    (1..=most.min(tops.len() - 1))
+        .map(|k| tops[k])
+        .find(|&hi| hi - lo < 0.5 * (all - lo))
+}
+
+/// A vertical colour bar in `area` (its left part): `colour(s)` for `s` from 0 (bottom) to 1
+/// (top), ticks `(s, label)` on its right, `caption` lines above it and `note` lines below
+/// (the scale).
+pub(crate) fn colour_bar(
+    area: &Area<'_>,
+    colour: impl Fn(f64) -> RGBColor,
+    ticks: &[(f64, String)],
+    caption: &[&str],
+    note: &[&str],
+) -> DrawResult {
+    let (_, h) = area.dim_in_pixel();
+    let top = 24 + 20 * caption.len() as i32;
+    let bottom = h as i32 - 70 - 18 * note.len() as i32;
+    let (x0, x1) = (20i32, 48i32);
+    let y_of = |s: f64| bottom - (s.clamp(0.0, 1.0) * f64::from(bottom - top)).round() as i32;
+    for y in top..=bottom {
+        let s = f64::from(bottom - y) / f64::from((bottom - top).max(1));
+        area.draw(&Rectangle::new([(x0, y), (x1, y + 1)], colour(s).filled()))?;
+    }
+    area.draw(&Rectangle::new(
+        [(x0, top), (x1, bottom)],
+        RGBColor(60, 60, 60).stroke_width(1),
+    ))?;
+    let style = left((FONT, 15).into_font().color(&BLACK));
+    for (s, text) in ticks {
+        let y = y_of(*s);
+        area.draw(&PathElement::new(
+            [(x1, y), (x1 + 6, y)],
+            BLACK.stroke_width(1),
+        ))?;
+        area.draw(&Text::new(text.clone(), (x1 + 10, y), style.clone()))?;
+    }
+    for (k, line) in caption.iter().enumerate() {
+        area.draw(&Text::new(
+            line.to_string(),
+            (x0 - 12, 12 + 20 * k as i32),
+            left((FONT, 16).into_font().color(&BLACK)),
+        ))?;
+    }
+    for (k, line) in note.iter().enumerate() {
+        area.draw(&Text::new(
+            line.to_string(),
+            (x0 - 12, bottom + 22 + 18 * k as i32),
+            left((FONT, 14).into_font().color(&RGBColor(60, 60, 60))),
+        ))?;
+    }
+    Ok(())
+}
+
 /// Formats an axis label value without trailing zeros (`0.25`, `10`, `-0.05`).
 pub(crate) fn tick(v: &f64) -> String {
     let s = format!("{:.6}", v);
@@ -818,31 +889,36 @@ fn energy_per_impact(root: &Area<'_>, data: &PlotData) -> DrawResult {
         _ => (0.0, 1.0),
     };
     let t_span = (t_last - t_first).max(f64::MIN_POSITIVE);
-    let mut legend = Vec::new();
-    if let (Some(first), Some(last)) = (data.energy.first(), data.energy.last()) {
-        legend.push((
-            Mark::Dot(ramp(0.0), 5),
-            format!("impact {} (τ/2π = {:.2})", first.0, first.1 / TAU),
-        ));
-        if n > 2 {
-            legend.push((Mark::Dot(ramp(0.5), 5), "…".to_string()));
-        }
-        if n > 1 {
-            legend.push((
-                Mark::Dot(ramp(1.0), 5),
-                format!("impact {} (τ/2π = {:.2})", last.0, last.1 / TAU),
-            ));
-        }
-    }
-    legend.push((
-        Mark::Dashed(BLACK),
-        "ΔK = 0 (above: the impact adds energy)".to_string(),
-    ));
+    let legend = vec![
+        (
+            Mark::Dot(ramp(0.5), 5),
+            "one impact, coloured by its time (colour bar)".to_string(),
+        ),
+        (
+            Mark::Dashed(BLACK),
+            "ΔK = 0 (above: the impact adds energy)".to_string(),
+        ),
+    ];
     let area = header(
         root,
         &format!("Energy per impact — {}", label(&data.model)),
         &subtitle,
         &legend,
+    )?;
+    let (w, _) = area.dim_in_pixel();
+    let (area, bar) = area.split_horizontally(w - 170);
+    let ticks: Vec<(f64, String)> = (0..=4)
+        .map(|k| {
+            let s = f64::from(k) / 4.0;
+            (s, format!("{:.1}", (t_first + s * t_span) / TAU))
+        })
+        .collect();
+    colour_bar(
+        &bar,
+        ramp,
+        &ticks,
+        &["time of the impact", "τ/2π (natural periods)"],
+        &["linear scale, first to", "last impact plotted"],
     )?;
     let (mut ylo, mut yhi) = range(data.energy.iter().map(|e| e.3).chain([0.0]), 0.08);
     if yhi - ylo < 0.2 {
@@ -871,4 +947,26 @@ fn energy_per_impact(root: &Area<'_>, data: &PlotData) -> DrawResult {
             .map(|&(_, t, ph, k)| Circle::new((ph, k), r, ramp((t - t_first) / t_span).filled())),
     )?;
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_few_far_points_are_left_out_of_the_axis_range() {
+        // 40 parameter values in [0, 0.2], one at rest in well 2 (x = 1).
+        let mut groups: Vec<Vec<f64>> = (0..40).map(|k| vec![0.005 * f64::from(k)]).collect();
+        groups.push(vec![1.0, 1.0]);
+        assert_eq!(trimmed_top(&groups, 0.0), Some(0.195));
+        // Spread data: nothing left out.
+        let spread: Vec<Vec<f64>> = (0..40).map(|k| vec![f64::from(k) / 39.0]).collect();
+        assert_eq!(trimmed_top(&spread, 0.0), None);
+        // More far groups than 1 in 20: they are data, not outliers.
+        let mut many = groups.clone();
+        many.extend((0..5).map(|_| vec![1.0]));
+        assert_eq!(trimmed_top(&many, 0.0), None);
+        assert_eq!(trimmed_top(&[], 0.0), None);
+        assert_eq!(trimmed_top(&[vec![1.0]], 0.0), None);
+    }
 }

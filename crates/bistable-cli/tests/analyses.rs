@@ -131,17 +131,76 @@ fn classify_reports_the_paper_classes() {
     );
 }
 
-/// The `outcomes` of a classify JSON as `(class:period:well, share)`, most frequent first.
+/// The `outcomes` of a classify JSON as `(class:period:well, fraction)`, most frequent first;
+/// checks that every entry is an object with the documented keys, consistent with `runs`.
 fn outcomes(c: &Value) -> Vec<(String, f64)> {
+    let runs = c["runs"].as_u64().unwrap() as f64;
     c["outcomes"]
-        .as_str()
-        .unwrap()
-        .split(';')
+        .as_array()
+        .unwrap_or_else(|| panic!("outcomes is not a list: {c}"))
+        .iter()
         .map(|o| {
-            let (k, f) = o.split_once('=').unwrap();
-            (k.to_string(), f.parse().unwrap())
+            // (serde_json's map sorts keys here; the printed order is checked by the Python
+            // tests, which compare with `bi.classify`'s dicts.)
+            let mut keys: Vec<&str> = o.as_object().unwrap().keys().map(|k| k.as_str()).collect();
+            keys.sort_unstable();
+            assert_eq!(
+                keys,
+                [
+                    "chaotic",
+                    "class",
+                    "count",
+                    "final_well",
+                    "fraction",
+                    "period"
+                ],
+                "{o}"
+            );
+            let period = match (&o["period"], &o["chaotic"]) {
+                (Value::Number(p), _) => format!("P-{p}"),
+                (_, Value::Bool(true)) => "chaotic".into(),
+                _ => "aperiodic".into(),
+            };
+            let well = o["final_well"]
+                .as_u64()
+                .map_or("-".to_string(), |w| w.to_string());
+            let fraction = o["fraction"].as_f64().unwrap();
+            assert_eq!(fraction, o["count"].as_u64().unwrap() as f64 / runs, "{o}");
+            (
+                format!("{}:{period}:{well}", o["class"].as_str().unwrap()),
+                fraction,
+            )
         })
         .collect()
+}
+
+/// A mass that never leaves the plate (V = 0: the plate stands still and the mass rests on
+/// it) is reported at rest, on the plate (sticking), without impacts; a plate that moves
+/// launches it (not at rest), and rest in well 2 is at rest too.
+#[test]
+fn classify_reports_a_mass_that_never_leaves_the_plate_at_rest() {
+    let c = json(&["classify", "--omega", "0.85", "--velocity", "0"]);
+    assert_eq!(c["at_rest"], true, "{c}");
+    assert_eq!(c["sticking"], true, "{c}");
+    assert_eq!(c["impacts_per_period"], 0, "{c}");
+    assert_eq!(
+        (&c["class"], &c["final_well"], &c["at_rest_in_second_well"]),
+        (&"intrawell".into(), &1.into(), &false.into()),
+        "{c}"
+    );
+    let c = json(&["classify", "--omega", "0.85", "--velocity", "0.01"]);
+    assert_eq!(
+        (&c["at_rest"], &c["sticking"]),
+        (&false.into(), &false.into()),
+        "{c}"
+    );
+    assert!(c["impacts_per_period"].as_u64().unwrap() > 0, "{c}");
+    let c = json(&["classify", "--omega", "0.85", "--velocity", "0.15"]);
+    assert_eq!(
+        (&c["at_rest"], &c["at_rest_in_second_well"]),
+        (&true.into(), &true.into())
+    );
+    assert_eq!(c["sticking"], false, "{c}");
 }
 
 #[test]
@@ -160,11 +219,11 @@ fn classify_flags_points_whose_outcome_rounding_decides() {
         ["continuous_interwell:P-1:-", "transient_interwell:P-1:2"],
         "{c}"
     );
-    // Shares are multiples of 1/9 printed to 3 decimals.
-    assert!((o.iter().map(|x| x.1).sum::<f64>() - 1.0).abs() < 2e-3);
+    // Shares are multiples of 1/9 (counts of the 9 runs).
+    assert!((o.iter().map(|x| x.1).sum::<f64>() - 1.0).abs() < 1e-12);
     // The reported class is the most frequent outcome.
     assert!(o[0].0.starts_with(c["class"].as_str().unwrap()), "{c}");
-    assert!((c["majority_fraction"].as_f64().unwrap() - o[0].1).abs() < 1e-3);
+    assert_eq!(c["majority_fraction"].as_f64().unwrap(), o[0].1);
     assert!(c["efoldings"].as_f64().unwrap() >= c["efoldings_threshold"].as_f64().unwrap());
 
     // Decided early with little growth: a single run, identical to a run without the test.
@@ -194,7 +253,7 @@ fn classify_flags_points_whose_outcome_rounding_decides() {
     assert_eq!(c["sensitive"], false, "{c}");
     assert_eq!(c["chaotic"], true);
     assert_eq!(c["sensitivity_trigger"], "aperiodic");
-    assert_eq!(c["outcomes"], "intrawell:chaotic:1=1.000");
+    assert_eq!(outcomes(&c), [("intrawell:chaotic:1".to_string(), 1.0)]);
 }
 
 /// Every point of the 60 × 40 map grid whose label changes between tol 1e-16, 1e-15 and 1e-14
@@ -742,7 +801,7 @@ fn map_writes_resumes_and_classifies() {
     assert_eq!(resumed["resumed"].as_u64(), Some(7));
     let rows = csv_rows(&csv);
     assert_eq!(rows.len(), 9);
-    assert!(rows.iter().all(|r| r.len() == 23), "no broken rows");
+    assert!(rows.iter().all(|r| r.len() == 24), "no broken rows");
 
     // No lock is left behind; a lock held by a live process (this test) refuses the run, a
     // stale one (no such process) is taken over.

@@ -3,15 +3,15 @@
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use bistable_analysis::record::Record;
+use bistable_analysis::record::{outcomes_text as text_of, parse_outcomes, OutcomeShare, Record};
 use bistable_analysis::sensitivity::SensitivityOptions;
 use bistable_analysis::sweep::{classify_point_with, classify_points_with};
 use bistable_analysis::thresholds::{self, check_restitution};
 use bistable_core::{ClassifyOptions, Sinusoid};
 
 use crate::common::{
-    check_signals, lanes as lanes_arg, model, param_err, positive, record_dict, released, sim_err,
-    threads as threads_arg, Stop,
+    check_signals, invalid_text, lanes as lanes_arg, model, outcome_list, param_err, positive,
+    record_dict, released, sim_err, threads as threads_arg, Stop,
 };
 
 #[allow(clippy::too_many_arguments)]
@@ -230,4 +230,38 @@ pub(crate) fn thresholds_of<'py>(
     d.set_item("omega", omega)?;
     d.set_item("quasi_static", omega.map(thresholds::quasi_static))?;
     Ok(d)
+}
+
+/// The map CSV's text of a record's `outcomes` (a list of dicts with the keys `class, period,
+/// chaotic, final_well, count, fraction`): `class:period:well=fraction;...`.
+#[pyfunction]
+pub(crate) fn outcomes_text(outcomes: &Bound<'_, PyList>) -> PyResult<String> {
+    let mut shares = Vec::with_capacity(outcomes.len());
+    for item in outcomes.iter() {
+        let d = item.downcast::<PyDict>()?;
+        let get = |k: &str| -> PyResult<Bound<'_, PyAny>> {
+            d.get_item(k)?
+                .ok_or_else(|| invalid_text("outcomes", k, "is missing from an outcome"))
+        };
+        shares.push(OutcomeShare {
+            class: get("class")?.extract()?,
+            period: get("period")?.extract()?,
+            chaotic: get("chaotic")?.extract()?,
+            final_well: get("final_well")?.extract()?,
+            count: get("count")?.extract()?,
+            fraction: get("fraction")?.extract()?,
+        });
+    }
+    Ok(text_of(&shares))
+}
+
+/// The outcomes (a list of dicts) of a map CSV's `outcomes` text, of a point with `runs` runs.
+#[pyfunction]
+pub(crate) fn outcomes_from_text<'py>(
+    py: Python<'py>,
+    text: &str,
+    runs: u32,
+) -> PyResult<Bound<'py, PyList>> {
+    let shares = parse_outcomes(text, runs).map_err(|e| invalid_text("outcomes", text, &e))?;
+    outcome_list(py, &shares)
 }

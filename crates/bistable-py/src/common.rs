@@ -12,7 +12,7 @@ use pyo3::exceptions::{PyRuntimeError, PyTypeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBool, PyBytes, PyDict, PyFloat, PyList};
 
-use bistable_analysis::record::{Record, Value};
+use bistable_analysis::record::{OutcomeShare, Record, Value};
 use bistable_analysis::{Model, Threads};
 use bistable_core::{ChatterRule, ParamError, Params, SimError, Sinusoid, SolverOptions, Width};
 
@@ -141,9 +141,31 @@ pub(crate) fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'p
             Value::Bool(b) => d.set_item(k, b)?,
             Value::S(s) => d.set_item(k, s)?,
             Value::Null => d.set_item(k, py.None())?,
+            Value::Outcomes(list, _) => d.set_item(k, outcome_list(py, list)?)?,
         }
     }
     Ok(d)
+}
+
+/// Outcomes as a list of dicts with the keys of [`OutcomeShare::FIELDS`] (those of the
+/// `outcomes` objects of `bistable classify`).
+pub(crate) fn outcome_list<'py>(
+    py: Python<'py>,
+    list: &[OutcomeShare],
+) -> PyResult<Bound<'py, PyList>> {
+    let out = PyList::empty(py);
+    let [class, period, chaotic, final_well, count, fraction] = OutcomeShare::FIELDS;
+    for o in list {
+        let d = PyDict::new(py);
+        d.set_item(class, &o.class)?;
+        d.set_item(period, o.period)?;
+        d.set_item(chaotic, o.chaotic)?;
+        d.set_item(final_well, o.final_well)?;
+        d.set_item(count, o.count)?;
+        d.set_item(fraction, o.fraction)?;
+        out.append(d)?;
+    }
+    Ok(out)
 }
 
 /// Most worker threads of a `threads` argument (also `bistable_impact._native.MAX_THREADS`).

@@ -49,6 +49,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify::classify, m)?)?;
     m.add_function(wrap_pyfunction!(classify::classify_many, m)?)?;
     m.add_function(wrap_pyfunction!(classify::thresholds_of, m)?)?;
+    m.add_function(wrap_pyfunction!(classify::outcomes_text, m)?)?;
+    m.add_function(wrap_pyfunction!(classify::outcomes_from_text, m)?)?;
     m.add_function(wrap_pyfunction!(orbit::orbit, m)?)?;
     m.add_function(wrap_pyfunction!(orbit::continue_omega, m)?)?;
     m.add_function(wrap_pyfunction!(bifurcation::bifurcation, m)?)?;

@@ -26,7 +26,7 @@ worker threads.
 
 from __future__ import annotations
 
-from typing import Any, Dict, Optional
+from typing import Any, Dict, Optional, TypedDict
 
 import numpy as np
 
@@ -49,6 +49,7 @@ __all__ = [
     "Simulator",
     "SimulationResult",
     "Table",
+    "Outcome",
     "IMPACT_COLUMNS",
     "SENSITIVITY_DEFAULTS",
     "sweep",
@@ -59,6 +60,24 @@ __all__ = [
 #: lyapunov_windows``; defined once, in ``bistable_analysis::sensitivity``).
 SENSITIVITY_DEFAULTS: Dict[str, Any] = dict(_native.SENSITIVITY_DEFAULTS)
 _SENS = SENSITIVITY_DEFAULTS
+
+#: One entry of the ``outcomes`` of :func:`classify` (and of each row of :func:`sweep.map
+#: <bistable_impact.sweep.map>`): a distinct outcome of the point's runs, as the objects of
+#: ``bistable classify``'s JSON. ``class`` as the record's; ``period`` in shaker periods, None
+#: when aperiodic; ``chaotic``; ``final_well`` 1 or 2, None for a continuous interwell
+#: response (it visits both); ``count`` runs (verdicts) that reached it; ``fraction`` =
+#: ``count / runs``.
+Outcome = TypedDict(
+    "Outcome",
+    {
+        "class": str,
+        "period": Optional[int],
+        "chaotic": bool,
+        "final_well": Optional[int],
+        "count": int,
+        "fraction": float,
+    },
+)
 
 #: Columns of :attr:`SimulationResult.impacts` (the CLI's impacts CSV header).
 IMPACT_COLUMNS = ("index", "t", "phase", "x", "v_before", "v_after", "delta_k")
@@ -132,6 +151,15 @@ def simulate(
     At most 1e7 events (impacts, sticking intervals, barrier crossings) are returned: a run
     with more raises ``RuntimeError`` (use :class:`Simulator` with a callback). Ctrl-C raises
     ``KeyboardInterrupt``.
+
+    Example (the paper's baseline case, 200 natural periods)::
+
+        >>> import bistable_impact as bi
+        >>> r = bi.simulate(1.75, 0.07, periods=200)
+        >>> r
+        SimulationResult(omega=1.75, velocity=0.07, t_end=1256.6370614359173, impacts=349, sticking=0, snaps=0)
+        >>> r.impacts["t"][:3].round(6).tolist(), r.final_state["well"]
+        ([0.0, 3.772532, 9.291869], 1)
     """
     m = check.model(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
     return SimulationResult(
@@ -175,7 +203,10 @@ def classify(
     chaotic, lyapunov (per unit of τ, or None), snap_throughs, final_well (1|2),
     at_rest_in_second_well, impacts_per_period, sticking, periods_simulated (natural periods),
     stopped_early, wall_time_s (s)`` and the sensitivity test's ``sensitive, runs,
-    majority_fraction, outcomes, sensitivity_trigger, efoldings, efoldings_threshold``.
+    majority_fraction, outcomes, sensitivity_trigger, efoldings, efoldings_threshold`` and
+    ``at_rest`` (the steady state is the mass at rest: at the second equilibrium, or on the
+    plate without ever leaving it, e.g. ``V = 0``: class ``'intrawell'``, period 1, no
+    impacts, ``sticking`` True).
 
     Sensitivity: a run whose transient amplified an infinitesimal perturbation by at least
     ``e**efoldings`` before its class was decided (tracked over the first ``horizon`` natural
@@ -185,8 +216,22 @@ def classify(
     on ``lyapunov_windows`` further windows of the run itself. ``sensitive`` is True when these
     do not all reach the same outcome (class, period, chaos, final well): double precision
     cannot decide such a point. The result is the most frequent outcome; ``outcomes`` lists
-    each as ``class:period:well=share`` joined by ``;``, most frequent first. ``repeats=0``
-    turns the test off (a single run). See ``docs/sensitivity.md``.
+    each distinct outcome, most frequent first, as a dict (:data:`Outcome`: ``class, period,
+    chaotic, final_well, count, fraction``; the map CSV writes them as the text
+    ``class:period:well=fraction`` joined by ``;``). ``repeats=0`` turns the test off (a
+    single run). See ``docs/sensitivity.md``.
+
+    Example (a point that no double-precision run can decide: a chaotic transient ends at rest
+    in well 2 or on the continuous interwell P-1 orbit, depending on rounding)::
+
+        >>> import bistable_impact as bi
+        >>> r = bi.classify(0.85, 0.13)
+        >>> r["class"], r["sensitive"], r["runs"]
+        ('transient_interwell', True, 9)
+        >>> [(o["class"], o["period"], o["final_well"], o["count"]) for o in r["outcomes"]]
+        [('transient_interwell', 1, 2, 5), ('continuous_interwell', 1, None, 4)]
+        >>> r["outcomes"][0]["fraction"] == 5 / 9 == r["majority_fraction"]
+        True
 
     Args (besides the model's, see :func:`simulate`):
         max_periods: longest run in natural periods, ``[1, 1e8]``.
@@ -236,6 +281,13 @@ def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict
     Args:
         restitution: ``e`` in ``[0, 1)``.
         omega: ``Ω`` (> 0), for the quasi-static threshold.
+
+    Example::
+
+        >>> import bistable_impact as bi
+        >>> t = bi.thresholds(0.85, omega=0.2)
+        >>> round(t["single_impact"], 6), round(t["interwell"], 6), t["quasi_static"]
+        (0.135135, 0.040541, 0.1)
     """
     return _native.thresholds_of(
         check.real("restitution", restitution), check.optional_real("omega", omega)
@@ -245,7 +297,14 @@ def thresholds(restitution: float = 0.85, omega: Optional[float] = None) -> Dict
 def linspace(start: float, end: float, n: int) -> np.ndarray:
     """``n`` evenly spaced values from ``start`` to ``end``, both included exactly: the values
     of the CLI's ``A:B:N`` ranges (one formula, ``bistable_analysis::grid``), with its limits:
-    finite ends, ``n`` in ``[1, 1e7]``."""
+    finite ends, ``n`` in ``[1, 1e7]``.
+
+    Example::
+
+        >>> import bistable_impact as bi
+        >>> bi.linspace(0.0, 1.0, 5).tolist()
+        [0.0, 0.25, 0.5, 0.75, 1.0]
+    """
     n = check.integer("n", n, 1, check.MAX_POINTS)
     values = _native.linspace(check.real("start", start), check.real("end", end), n)
     return np.array(values, dtype=float)

@@ -101,7 +101,7 @@ def main(argv: Optional[List[str]] = None) -> int:
         if client is not None:
             client.close()
     if a.out is None:
-        df.to_csv(sys.stdout, index=False)
+        sweep.to_csv_frame(df).to_csv(sys.stdout, index=False)
     return 0
 
 

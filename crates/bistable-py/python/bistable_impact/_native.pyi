@@ -1,9 +1,21 @@
 """Type stubs of the Rust extension module (see the package docstring for units)."""
 
-from typing import Any, Callable, Dict, List, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Optional, Tuple, TypedDict, Union
 
 Column = Tuple[str, str, bytes]  # name, numpy dtype without byte order ('f8' | 'i8' | 'b1'), LE data
 Event = Dict[str, Any]
+#: One entry of a classify record's ``outcomes`` (``bistable_impact.Outcome``).
+Outcome = TypedDict(
+    "Outcome",
+    {
+        "class": str,
+        "period": Optional[int],
+        "chaotic": bool,
+        "final_well": Optional[int],
+        "count": int,
+        "fraction": float,
+    },
+)
 
 #: Keys of the classify record, in order: the map CSV's columns.
 COLUMNS: List[str]
@@ -68,6 +80,8 @@ def classify_many(
 ) -> List[Dict[str, Any]]: ...
 def thresholds_of(restitution: float = 0.85, omega: Optional[float] = None) -> Dict[str, Any]: ...
 def linspace(start: float, end: float, n: int) -> List[float]: ...
+def outcomes_text(outcomes: List[Outcome]) -> str: ...
+def outcomes_from_text(text: str, runs: int) -> List[Outcome]: ...
 
 # The analyses (see bistable_impact.analyses for the keys and units). Tables come as lists of
 # Column; "orbits" tables have a separate "cycle_max" list of lists (None for arclength).

@@ -79,6 +79,13 @@ def orbit(
     Raises:
         ValueError: a bad argument (named). RuntimeError: Newton failed (``no P-periodic orbit
         found from (x, v): ...``) or the simulation failed.
+
+    Example (the stable period-2 orbit of the paper's Fig. 6 at ``Ω = 2.2``)::
+
+        >>> import bistable_impact as bi
+        >>> o = bi.orbit(2.2, 0.07, period=2)
+        >>> o["stable"], o["impacts"], [round(m["abs"], 4) for m in o["multipliers"]]
+        (True, 2, [0.6445, 0.6445])
     """
     m = check.model(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
     d = _native.orbit(
@@ -308,6 +315,13 @@ def spectrum(
         samples: samples per shaker period (>= 4; ``record·samples <= 2^26``).
         max_freq: highest frequency (units of ``Ω``, > 0) of the flatness.
         zeta, restitution, tol, chatter: as for :func:`bistable_impact.simulate`.
+
+    Example (a period-2 response: lines at multiples of ``Ω/2``)::
+
+        >>> import bistable_impact as bi
+        >>> sp = bi.spectrum(2.2, 0.07)
+        >>> sp["period"], sp["spectrum"].columns.tolist()
+        (2, ['freq_over_omega', 'amplitude'])
     """
     m = check.model(omega=omega, velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
     d = _native.spectrum(

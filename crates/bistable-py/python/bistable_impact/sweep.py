@@ -4,7 +4,10 @@ from __future__ import annotations
 
 import os
 import sys
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Optional, Sequence, Tuple, Union
+
+if TYPE_CHECKING:  # pandas is optional (the [pandas] extra)
+    import pandas as pd
 
 
 from . import _check as check
@@ -51,6 +54,7 @@ class _Store:
             same = (old["zeta"] == zeta) & (old["restitution"] == restitution)
             for rec in old[same].to_dict("records"):
                 rec = {k: (None if pd.isna(x) else x) for k, x in rec.items()}
+                rec["outcomes"] = _native.outcomes_from_text(rec["outcomes"], int(rec["runs"]))
                 self.done[(rec["omega"], rec["velocity"])] = rec
         else:
             with open(path, "w") as f:
@@ -61,7 +65,7 @@ class _Store:
 
         if not records:
             return
-        rows = pd.DataFrame.from_records(records, columns=list(COLUMNS))
+        rows = to_csv_frame(pd.DataFrame.from_records(records, columns=list(COLUMNS)))
         with open(self.path, "a", newline="") as f:
             rows.to_csv(f, header=False, index=False)
             f.flush()
@@ -92,11 +96,26 @@ def map(
     horizon: float = _SENS["horizon"],
     repeat_periods: float = _SENS["repeat_periods"],
     lyapunov_windows: int = _SENS["lyapunov_windows"],
-):
+) -> "pd.DataFrame":
     """Classifies every point of the grid ``omega × velocity`` (:func:`bistable_impact.classify`
     at each ``(Ω, V)``) and returns a pandas DataFrame with the CLI map CSV's columns
     (:data:`COLUMNS`), one row per point, ordered with ``velocity`` outer and ``omega`` inner as
     the CLI's grid. ``lyapunov_periods`` defaults to 300 as in ``bistable map``.
+
+    Column types: floats; ``period``, ``impacts_per_period``, ``snap_throughs``,
+    ``final_well`` and ``runs`` as ``Int64`` (``<NA>`` for None); flags as ``bool``;
+    ``class`` and ``sensitivity_trigger`` as text; ``outcomes`` as the list of dicts of
+    :func:`bistable_impact.classify` (:data:`bistable_impact.Outcome`). The CSV files (``store``,
+    :func:`to_csv_frame`) hold ``outcomes`` as the CLI's text; :func:`read_csv` reads them.
+
+    Example::
+
+        >>> import bistable_impact as bi
+        >>> df = bi.sweep.map([0.85], [0.11, 0.15], threads=1)
+        >>> df[["velocity", "class", "period", "final_well"]].values.tolist()
+        [[0.11, 'intrawell', 4, 1], [0.15, 'transient_interwell', 1, 2]]
+        >>> df["outcomes"][1]
+        [{'class': 'transient_interwell', 'period': 1, 'chaotic': False, 'final_well': 2, 'count': 1, 'fraction': 1.0}]
 
     Args:
         omega, velocity: the grid's values of ``Ω`` and ``V`` (as for
@@ -189,12 +208,46 @@ def map(
             if report is not None:
                 report(finished, len(todo))
     df = pd.DataFrame.from_records([done[p] for p in points], columns=list(COLUMNS))
-    for c in ("period", "impacts_per_period", "snap_throughs", "final_well"):
+    for c in ("period", "impacts_per_period", "snap_throughs", "final_well", "runs"):
         df[c] = df[c].astype("Int64")
-    for c in ("chaotic", "at_rest_in_second_well", "sticking", "stopped_early"):
+    for c in ("chaotic", "at_rest_in_second_well", "sticking", "stopped_early", "sensitive",
+              "at_rest"):
         df[c] = df[c].astype(bool)
     if store is not None:
-        df.to_csv(store, index=False)
+        to_csv_frame(df).to_csv(store, index=False)
+    return df
+
+
+def to_csv_frame(df: "pd.DataFrame") -> "pd.DataFrame":
+    """A copy of a :func:`map` DataFrame in the form of the map CSV (``bistable map --out``):
+    the ``outcomes`` lists as their text ``class:period:well=fraction`` joined by ``;``. Write
+    it with ``to_csv(path, index=False)``; :func:`read_csv` reads such a file back."""
+    out = df.copy()
+    out["outcomes"] = [_native.outcomes_text(list(o)) for o in df["outcomes"]]
+    return out
+
+
+def read_csv(path: Union[str, "os.PathLike[str]"]) -> "pd.DataFrame":
+    """A map CSV (``bistable map --out``, a ``store`` of :func:`map`) as the DataFrame
+    :func:`map` returns: integer columns as ``Int64`` (empty cells ``<NA>``), flags as
+    ``bool``, ``outcomes`` as lists of dicts (:data:`bistable_impact.Outcome`). Raises
+    ``ValueError`` for a file without the map columns or with an unreadable ``outcomes``."""
+    import pandas as pd
+
+    path = check.path("path", path)
+    if path is None:
+        raise TypeError("'path' must be a path (str or os.PathLike), not None")
+    df = pd.read_csv(path)
+    if list(df.columns) != list(COLUMNS):
+        raise ValueError(f"{path!r} does not have the map columns {','.join(COLUMNS)}")
+    df["outcomes"] = [
+        _native.outcomes_from_text(str(t), int(n)) for t, n in zip(df["outcomes"], df["runs"])
+    ]
+    for c in ("period", "impacts_per_period", "snap_throughs", "final_well", "runs"):
+        df[c] = df[c].astype("Int64")
+    for c in ("chaotic", "at_rest_in_second_well", "sticking", "stopped_early", "sensitive",
+              "at_rest"):
+        df[c] = df[c].astype(bool)
     return df
 
 
