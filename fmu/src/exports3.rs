@@ -300,9 +300,7 @@ unsafe fn get<T>(
         scalars(nvr, n_values)?;
         let vrs = array(vr, nvr, "valueReferences")?;
         let dst = array_mut(values, nvr, "values")?;
-        for (d, v) in dst.iter_mut().zip(inst.get(vrs, ty)?) {
-            *d = conv(v);
-        }
+        inst.get_into(vrs, ty, dst, conv)?;
         Ok(fmi3OK)
     })
 }
@@ -322,11 +320,8 @@ unsafe fn set<T: Copy>(
     call(c, func, allowed::SET, |inst| {
         scalars(nvr, n_values)?;
         let vrs = array(vr, nvr, "valueReferences")?;
-        let vals: Vec<f64> = array(values, nvr, "values")?
-            .iter()
-            .map(|&v| conv(v))
-            .collect();
-        inst.set(vrs, &vals, ty)
+        let vals = array(values, nvr, "values")?;
+        inst.set_from(vrs, vals, ty, conv)
     })
 }
 
