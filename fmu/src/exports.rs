@@ -295,7 +295,7 @@ unsafe fn get_values<T>(
     nvr: usize,
     value: *mut T,
     ty: Access,
-    conv: fn(f64) -> T,
+    conv: impl Fn(f64) -> T + Copy,
 ) -> fmi2Status {
     call(c, func, allowed::GET, |inst| {
         let vrs = array(vr, nvr, "vr")?;
@@ -313,7 +313,7 @@ unsafe fn set_values<T: Copy>(
     nvr: usize,
     value: *const T,
     ty: Access,
-    conv: fn(T) -> f64,
+    conv: impl Fn(T) -> f64 + Copy,
 ) -> fmi2Status {
     call(c, func, allowed::SET, |inst| {
         let vrs = array(vr, nvr, "vr")?;

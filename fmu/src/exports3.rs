@@ -294,7 +294,7 @@ unsafe fn get<T>(
     values: *mut T,
     n_values: usize,
     ty: Access,
-    conv: fn(f64) -> T,
+    conv: impl Fn(f64) -> T + Copy,
 ) -> fmi3Status {
     call(c, func, allowed::GET, |inst| {
         scalars(nvr, n_values)?;
@@ -315,7 +315,7 @@ unsafe fn set<T: Copy>(
     values: *const T,
     n_values: usize,
     ty: Access,
-    conv: fn(T) -> f64,
+    conv: impl Fn(T) -> f64 + Copy,
 ) -> fmi3Status {
     call(c, func, allowed::SET, |inst| {
         scalars(nvr, n_values)?;

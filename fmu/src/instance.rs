@@ -564,7 +564,7 @@ impl Instance {
         vrs: &[fmi2ValueReference],
         ty: Access,
         dst: &mut [T],
-        conv: fn(f64) -> T,
+        conv: impl Fn(f64) -> T + Copy,
     ) -> Result<(), String> {
         let mut want: VarSet = 0;
         for &vr in vrs {
@@ -624,7 +624,7 @@ impl Instance {
         vrs: &[fmi2ValueReference],
         vals: &[T],
         ty: Access,
-        conv: fn(T) -> f64,
+        conv: impl Fn(T) -> f64 + Copy,
     ) -> Outcome {
         for (&vr, &value) in vrs.iter().zip(vals) {
             let i = self.lookup(vr, ty)?;

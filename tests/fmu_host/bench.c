@@ -212,6 +212,16 @@ static double me3(int variant) {
     return dt;
 }
 
+/* One fmi2DoStep over [0, t_end] (bare, internal mode). */
+static double cs2_one_step(double t_end) {
+    fmi2Component c = start2(fmi2CoSimulation, BARE);
+    double t0 = now();
+    if (F.fmi2DoStep(c, 0.0, t_end, fmi2True) != fmi2OK) fail("fmi2DoStep", 0);
+    double dt = now() - t0;
+    F.fmi2FreeInstance(c);
+    return dt;
+}
+
 /* ---- the table ---- */
 
 enum { CS2, CS3, ME2, ME3, NLOOP };
@@ -252,8 +262,17 @@ void bench(void) {
                 double dt = loop_fn[l](v);
                 best[l][v] = dt < best[l][v] ? dt : best[l][v];
             }
+    double big = INFINITY;
+    if (on[CS2][BARE])
+        for (int r = 0; r < rounds; r++) {
+            double dt = cs2_one_step(t_end);
+            big = dt < big ? dt : big;
+        }
     printf("bench: baseline Omega=%g V=%g, tau <= %g, h = %g (%ld steps), best of %d alternating rounds\n",
            OMEGA, VEL, t_end, h, nsteps, rounds);
+    if (on[CS2][BARE])
+        printf("bench: one fmi2DoStep of %g: %.3f ms; %ld of h = %g: %.3f ms, %.2f x one step\n", t_end,
+               big * 1e3, nsteps, h, best[CS2][BARE] * 1e3, best[CS2][BARE] / big);
     printf("| host loop | per communication step | ns | x bare | x internal with Set |\n");
     printf("|---|---|---|---|---|\n");
     for (int l = 0; l < NLOOP; l++)
