@@ -9,8 +9,8 @@
  *   sampled   the same Set, then the step, in external mode (the plate from the sampled
  *             inputs; co-simulation: Hermite reconstruction)
  * The inputs are the baseline sinusoid at the communication points, computed before the timing.
- * The variants run alternately, 7 rounds, and each reports its best round, so that the ratios
- * come from one run under the same machine load. */
+ * The variants run alternately, 7 rounds (BENCH_ROUNDS), and each reports its best round, so
+ * that the ratios come from one run under the same machine load. */
 #include "host.h"
 
 enum { BARE, GET, SET, SAMPLED, NVARIANT };
@@ -212,6 +212,39 @@ static double me3(int variant) {
     return dt;
 }
 
+/* fmi3DoStep with earlyReturnAllowed and eventModeUsed: every event an early return followed by
+ * event mode (fmi3EnterEventMode, fmi3UpdateDiscreteStates, fmi3EnterStepMode); `*returns`
+ * counts the early returns. */
+static double cs3_early(long *returns) {
+    fmi3Instance c = F.fmi3InstantiateCoSimulation("bench", guid, NULL, false, false, true, true, NULL, 0,
+                                                   NULL, NULL, NULL);
+    bool need = false, term = false, ret = false, defined = false, changed = false;
+    double last = 0.0, next_event = 0.0;
+    if (!c || F.fmi3EnterInitializationMode(c, false, 0, 0.0, false, 0) != fmi3OK ||
+        F.fmi3ExitInitializationMode(c) != fmi3OK ||
+        F.fmi3UpdateDiscreteStates(c, &need, &term, &changed, &changed, &defined, &next_event) != fmi3OK ||
+        F.fmi3EnterStepMode(c) != fmi3OK)
+        fail("fmi3 start (early return)", 0);
+    *returns = 0;
+    double t0 = now(), t = 0.0;
+    for (long k = 0; k < nsteps; k++) {
+        double next = (double)(k + 1) * step_h;
+        while (t < next) {
+            if (F.fmi3DoStep(c, t, next - t, true, &need, &term, &ret, &last) != fmi3OK) fail("fmi3DoStep", t);
+            t = ret ? last : next;
+            *returns += ret;
+            if (need && (F.fmi3EnterEventMode(c) != fmi3OK ||
+                         F.fmi3UpdateDiscreteStates(c, &need, &term, &changed, &changed, &defined,
+                                                    &next_event) != fmi3OK ||
+                         F.fmi3EnterStepMode(c) != fmi3OK))
+                fail("fmi3 event mode", t);
+        }
+    }
+    double dt = now() - t0;
+    F.fmi3FreeInstance(c);
+    return dt;
+}
+
 /* One fmi2DoStep over [0, t_end] (bare, internal mode). */
 static double cs2_one_step(double t_end) {
     fmi2Component c = start2(fmi2CoSimulation, BARE);
@@ -231,7 +264,9 @@ static double (*const loop_fn[NLOOP])(int) = {cs2, cs3, me2, me3};
 
 void bench(void) {
     const double t_end = 1000.0, h = 0.01;
-    const int rounds = 7;
+    /* BENCH_ROUNDS: more rounds for a busy machine (each variant keeps its best round). */
+    const char *env_rounds = getenv("BENCH_ROUNDS");
+    const int rounds = env_rounds && atoi(env_rounds) > 0 ? atoi(env_rounds) : 7;
     step_h = h;
     nsteps = (long)(t_end / h + 0.5);
     inputs = malloc(2 * (size_t)nsteps * sizeof *inputs);
@@ -273,6 +308,17 @@ void bench(void) {
     if (on[CS2][BARE])
         printf("bench: one fmi2DoStep of %g: %.3f ms; %ld of h = %g: %.3f ms, %.2f x one step\n", t_end,
                big * 1e3, nsteps, h, best[CS2][BARE] * 1e3, best[CS2][BARE] / big);
+    if (on[CS3][BARE]) {
+        double early = INFINITY;
+        long returns = 0;
+        for (int r = 0; r < rounds; r++) {
+            double dt = cs3_early(&returns);
+            early = dt < early ? dt : early;
+        }
+        printf("bench: fmi3DoStep with early return and event mode: %.1f ns per step (%ld early returns), "
+               "%.2f x bare fmi3DoStep\n",
+               early / (double)nsteps * 1e9, returns, early / best[CS3][BARE]);
+    }
     printf("| host loop | per communication step | ns | x bare | x internal with Set |\n");
     printf("|---|---|---|---|---|\n");
     for (int l = 0; l < NLOOP; l++)
