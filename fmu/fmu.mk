@@ -5,7 +5,8 @@
 #   make test-fmu       C host (cbindgen header, dlopen) + fmpy validate (both FMUs) + pytest tests/fmu
 #   make fmu-reference  regenerate the co-simulation regression CSVs in tests/fmu/reference/
 #   make fmu-guid       rewrite the guid of modelDescription.xml after editing it
-#   make fmu-bench      cost per fmi2DoStep (C host) and fmpy simulate wall time
+#   make fmu-bench      cost per communication step in FMI 2.0/3.0 CS and ME host loops (C host:
+#                       bare step, + Get(x, v), + Set(z_in, zdot_in), sampled inputs) and fmpy
 #   make stress-fmu     fault campaign (part of make stress): C host fuzz mode over FUZZ_SEEDS x
 #                       FUZZ_CALLS, valgrind memcheck (host test + VALGRIND_SEEDS x VALGRIND_CALLS),
 #                       cargo-fuzz targets for FUZZ_SECONDS each
@@ -68,7 +69,7 @@ fmu: setup
 	cd $(FMU3_STAGE) && python3 -m zipfile -c ../$(FMU_NAME)_fmi3.fmu modelDescription.xml binaries documentation
 	@echo "fmu: $(FMU) $(FMU3)"
 
-FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/me.c tests/fmu_host/fuzz.c
+FMU_HOST_SRC := tests/fmu_host/host.c tests/fmu_host/me.c tests/fmu_host/fuzz.c tests/fmu_host/bench.c
 $(FMU_HOST): $(FMU_HOST_SRC) tests/fmu_host/host.h tests/fmu_host/md_text.h tests/fmu_host/fuzzkit.h fmu/include/$(FMU_NAME).h
 	mkdir -p $(FMU_DIR)
 	$(CC) -std=gnu11 -O2 -g -Wall -Wextra -Werror -Ifmu/include $(FMU_HOST_SRC) -o $@ -ldl -lm

@@ -295,14 +295,12 @@ unsafe fn get_values<T>(
     nvr: usize,
     value: *mut T,
     ty: Access,
-    conv: fn(f64) -> T,
+    conv: impl Fn(f64) -> T + Copy,
 ) -> fmi2Status {
     call(c, func, allowed::GET, |inst| {
         let vrs = array(vr, nvr, "vr")?;
         let dst = array_mut(value, nvr, "value")?;
-        for (d, v) in dst.iter_mut().zip(inst.get(vrs, ty)?) {
-            *d = conv(v);
-        }
+        inst.get_into(vrs, ty, dst, conv)?;
         Ok(fmi2OK)
     })
 }
@@ -315,15 +313,12 @@ unsafe fn set_values<T: Copy>(
     nvr: usize,
     value: *const T,
     ty: Access,
-    conv: fn(T) -> f64,
+    conv: impl Fn(T) -> f64 + Copy,
 ) -> fmi2Status {
     call(c, func, allowed::SET, |inst| {
         let vrs = array(vr, nvr, "vr")?;
-        let vals: Vec<f64> = array(value, nvr, "value")?
-            .iter()
-            .map(|&v| conv(v))
-            .collect();
-        inst.set(vrs, &vals, ty)
+        let vals = array(value, nvr, "value")?;
+        inst.set_from(vrs, vals, ty, conv)
     })
 }
 

@@ -294,15 +294,13 @@ unsafe fn get<T>(
     values: *mut T,
     n_values: usize,
     ty: Access,
-    conv: fn(f64) -> T,
+    conv: impl Fn(f64) -> T + Copy,
 ) -> fmi3Status {
     call(c, func, allowed::GET, |inst| {
         scalars(nvr, n_values)?;
         let vrs = array(vr, nvr, "valueReferences")?;
         let dst = array_mut(values, nvr, "values")?;
-        for (d, v) in dst.iter_mut().zip(inst.get(vrs, ty)?) {
-            *d = conv(v);
-        }
+        inst.get_into(vrs, ty, dst, conv)?;
         Ok(fmi3OK)
     })
 }
@@ -317,16 +315,13 @@ unsafe fn set<T: Copy>(
     values: *const T,
     n_values: usize,
     ty: Access,
-    conv: fn(T) -> f64,
+    conv: impl Fn(T) -> f64 + Copy,
 ) -> fmi3Status {
     call(c, func, allowed::SET, |inst| {
         scalars(nvr, n_values)?;
         let vrs = array(vr, nvr, "valueReferences")?;
-        let vals: Vec<f64> = array(values, nvr, "values")?
-            .iter()
-            .map(|&v| conv(v))
-            .collect();
-        inst.set(vrs, &vals, ty)
+        let vals = array(values, nvr, "values")?;
+        inst.set_from(vrs, vals, ty, conv)
     })
 }
 

@@ -17,7 +17,8 @@ use crate::fmi3::fmi3LogMessageCallback;
 use crate::md::{cat, var, Causality, Kind, CATEGORIES, EVENT_INDICATORS, STATES, VARS};
 use crate::me::Me;
 use crate::model::{
-    Model, PlateInputs, StepFailure, MAX_CLOCK_SPAN, MAX_PLATE_ORDER, MAX_STEP_SPAN,
+    bit, Model, PlateInputs, StepFailure, VarSet, ALL, MAX_CLOCK_SPAN, MAX_PLATE_ORDER,
+    MAX_STEP_SPAN,
 };
 use crate::num::Num;
 use crate::state::Snapshot;
@@ -270,9 +271,11 @@ pub struct Instance {
     model: Option<Model>,
     /// The running Model Exchange model, after initialization (ME instances).
     me: Option<Me>,
-    /// Outputs must be recomputed before they are read (they are computed on demand, so a
-    /// step costs only the integration).
-    outputs_stale: bool,
+    /// The computed variables (outputs, state derivatives, event indicators, time) whose
+    /// value in `values` is current: a read computes only the variables it asks for that are
+    /// not (so a step costs only the integration, and a read only what it reads), each at most
+    /// once between two changes of the model.
+    fresh: VarSet,
     last_successful_time: f64,
     terminated: bool,
     /// FMU states handed out by this instance (addresses of `Box<Snapshot>`).
@@ -316,7 +319,7 @@ impl Instance {
             stop_time: None,
             model: None,
             me: None,
-            outputs_stale: true,
+            fresh: 0,
             last_successful_time: 0.0,
             terminated: false,
             states: HashSet::new(),
@@ -429,7 +432,7 @@ impl Instance {
         }
         self.start_time = start;
         self.stop_time = stop;
-        self.outputs_stale = true;
+        self.fresh = 0;
         Ok(fmi2OK)
     }
 
@@ -449,7 +452,7 @@ impl Instance {
             &mut self.events,
         )?;
         model.write_outputs(&mut self.values)?;
-        self.outputs_stale = false;
+        self.fresh = ALL;
         Ok(model)
     }
 
@@ -459,7 +462,7 @@ impl Instance {
     pub fn exit_initialization(&mut self) -> Outcome {
         if self.interface == Interface::ModelExchange {
             self.me = Some(Me::start(&self.values, self.start_time)?);
-            self.outputs_stale = true;
+            self.fresh = 0;
             self.lifecycle = Lifecycle::EventMode;
             return Ok(fmi2OK);
         }
@@ -506,7 +509,7 @@ impl Instance {
         self.stop_time = None;
         self.model = None;
         self.me = None;
-        self.outputs_stale = true;
+        self.fresh = 0;
         self.last_successful_time = 0.0;
         self.terminated = false;
         Ok(fmi2OK)
@@ -519,80 +522,170 @@ impl Instance {
     }
 
     /// Index of the variable with value reference `vr`, read or written as `ty`.
+    #[inline]
     fn lookup(&self, vr: fmi2ValueReference, ty: Access) -> Result<usize, String> {
-        let i = VARS
-            .iter()
-            .position(|v| v.vr == vr)
-            .ok_or_else(|| format!("unknown value reference {vr}"))?;
+        // Value references are the variables' positions in the model description; the search
+        // covers any other numbering.
+        let i = match VARS.get(vr as usize) {
+            Some(v) if v.vr == vr => vr as usize,
+            _ => VARS
+                .iter()
+                .position(|v| v.vr == vr)
+                .ok_or_else(|| format!("unknown value reference {vr}"))?,
+        };
         if !ty.reaches(&VARS[i]) {
-            return Err(format!(
-                "{} is {}, not {}",
-                label(i),
-                Access::of(&VARS[i], self.api),
-                ty.name()
-            ));
+            return Err(self.wrong_type(i, ty));
         }
         Ok(i)
     }
 
-    /// Values of the variables `vrs`, read as `ty`.
-    pub fn get(&mut self, vrs: &[fmi2ValueReference], ty: Access) -> Result<Vec<f64>, String> {
-        let idx = vrs
-            .iter()
-            .map(|&vr| self.lookup(vr, ty))
-            .collect::<Result<Vec<_>, _>>()?;
-        let wants_output = idx.iter().any(|&i| {
-            matches!(
-                VARS[i].causality,
-                Causality::Output | Causality::Local | Causality::Independent
-            )
-        });
-        if wants_output && self.outputs_stale {
-            self.refresh_outputs()?;
-        }
-        Ok(idx.iter().map(|&i| self.values[i]).collect())
+    /// Refusal of variable `i` read or written as `ty`.
+    #[cold]
+    fn wrong_type(&self, i: usize, ty: Access) -> String {
+        format!(
+            "{} is {}, not {}",
+            label(i),
+            Access::of(&VARS[i], self.api),
+            ty.name()
+        )
     }
 
-    /// Recomputes the outputs (and state derivatives) into `values`; in initialization mode
-    /// from a model built at the start time from the current values.
-    fn refresh_outputs(&mut self) -> Result<(), String> {
+    /// Values of the variables `vrs`, read as `ty`.
+    pub fn get(&mut self, vrs: &[fmi2ValueReference], ty: Access) -> Result<Vec<f64>, String> {
+        let mut out = vec![0.0; vrs.len()];
+        self.get_into(vrs, ty, &mut out, |v| v)?;
+        Ok(out)
+    }
+
+    /// Values of the variables `vrs`, read as `ty`, converted by `conv` into `dst` (as long as
+    /// `vrs`); nothing is written when a value reference is refused.
+    pub fn get_into<T>(
+        &mut self,
+        vrs: &[fmi2ValueReference],
+        ty: Access,
+        dst: &mut [T],
+        conv: impl Fn(f64) -> T + Copy,
+    ) -> Result<(), String> {
+        let mut want: VarSet = 0;
+        for &vr in vrs {
+            let i = self.lookup(vr, ty)?;
+            if computed(i) {
+                want |= bit(i);
+            }
+        }
+        let missing = want & !self.fresh;
+        if missing != 0 {
+            self.refresh_outputs(missing)?;
+        }
+        for (d, &vr) in dst.iter_mut().zip(vrs) {
+            *d = conv(self.values[vr_index(vr)]);
+        }
+        Ok(())
+    }
+
+    /// Computes the variables of `missing` (outputs, state derivatives) into `values`; in
+    /// initialization mode, every one from a model built at the start time from the current
+    /// values.
+    fn refresh_outputs(&mut self, missing: VarSet) -> Result<(), String> {
         let cannot = |e: String| format!("outputs cannot be computed: {e}");
         match (&mut self.model, &self.me, self.interface) {
-            (Some(model), _, _) => model.write_outputs(&mut self.values)?,
-            (_, Some(me), _) => me.write_outputs(&mut self.values),
+            (Some(model), _, _) => {
+                model.write_some(&mut self.values, missing)?;
+                self.fresh |= missing;
+            }
+            (_, Some(me), _) => {
+                me.write_some(&mut self.values, missing);
+                self.fresh |= missing;
+            }
             (None, None, Interface::CoSimulation) => {
                 self.start_model().map_err(cannot)?;
+                self.fresh = ALL;
             }
-            (None, None, Interface::ModelExchange) => Me::start(&self.values, self.start_time)
-                .map_err(cannot)?
-                .write_outputs(&mut self.values),
+            (None, None, Interface::ModelExchange) => {
+                Me::start(&self.values, self.start_time)
+                    .map_err(cannot)?
+                    .write_outputs(&mut self.values);
+                self.fresh = ALL;
+            }
         }
-        self.outputs_stale = false;
         Ok(())
     }
 
     /// Sets the variables `vrs`, written as `ty` (all or none).
     pub fn set(&mut self, vrs: &[fmi2ValueReference], vals: &[f64], ty: Access) -> Outcome {
-        let mut checked = Vec::with_capacity(vrs.len());
+        self.set_from(vrs, vals, ty, |v| v)
+    }
+
+    /// Sets the variables `vrs` to `vals` converted by `conv`, written as `ty` (all or none). A
+    /// value equal to the one held changes nothing; a changed one makes stale only the computed
+    /// values that depend on it now (see [`Instance::affects_outputs`]).
+    pub fn set_from<T: Copy>(
+        &mut self,
+        vrs: &[fmi2ValueReference],
+        vals: &[T],
+        ty: Access,
+        conv: impl Fn(T) -> f64 + Copy,
+    ) -> Outcome {
         for (&vr, &value) in vrs.iter().zip(vals) {
             let i = self.lookup(vr, ty)?;
             self.check_settable(i)?;
-            checked.push((i, check_range(i, value)?));
+            check_range(i, conv(value))?;
         }
-        for (i, value) in checked {
-            self.values[i] = value;
+        let mut stale = false;
+        for (&vr, &value) in vrs.iter().zip(vals) {
+            let (i, value) = (vr_index(vr), conv(value));
+            if self.values[i].to_bits() != value.to_bits() {
+                self.values[i] = value;
+                stale |= self.affects_outputs(i);
+            }
         }
-        self.outputs_stale = true;
+        if stale {
+            self.fresh = 0;
+        }
         Ok(fmi2OK)
     }
 
+    /// Whether a new value of variable `i` changes computed values before the next step or
+    /// event: not for a co-simulation model that runs (its outputs come from its own state;
+    /// inputs and tunable parameters act from the next step on), nor for a Model Exchange one
+    /// but through the inputs of its external plate; always before a model runs (the values
+    /// of initialization mode come from a model built from the current values).
+    fn affects_outputs(&self, i: usize) -> bool {
+        match (&self.model, &self.me) {
+            (Some(_), _) => false,
+            (_, Some(me)) => me.reads_input(i),
+            (None, None) => true,
+        }
+    }
+
+    /// Whether variable `i` may be set now (an input always; a parameter as its variability
+    /// and the lifecycle state allow).
+    #[inline]
     fn check_settable(&self, i: usize) -> Result<(), String> {
         let v = &VARS[i];
         let running = matches!(
             self.lifecycle,
             Lifecycle::StepComplete | Lifecycle::EventMode | Lifecycle::ContinuousTimeMode
         );
-        match v.causality {
+        let settable = match v.causality {
+            Causality::Input => true,
+            Causality::Parameter => {
+                self.lifecycle != Lifecycle::ContinuousTimeMode && (v.tunable || !running)
+            }
+            _ => false,
+        };
+        if settable {
+            Ok(())
+        } else {
+            Err(self.not_settable(i, running))
+        }
+    }
+
+    /// Why variable `i` cannot be set now (see [`Instance::check_settable`]).
+    #[cold]
+    fn not_settable(&self, i: usize, running: bool) -> String {
+        let v = &VARS[i];
+        let refusal: Result<(), String> = match v.causality {
             Causality::Output => Err(format!("{} is an output and cannot be set", label(i))),
             Causality::Local => Err(format!(
                 "{} is computed by the FMU and cannot be set",
@@ -615,7 +708,8 @@ impl Instance {
                 self.func("Reset")
             )),
             _ => Ok(()),
-        }
+        };
+        refusal.err().unwrap_or_default()
     }
 
     /// `fmi2SetRealInputDerivatives`: derivatives of `z_in` (orders 1..=5) and `zdot_in`
@@ -729,7 +823,7 @@ impl Instance {
             &mut self.events,
             early,
         );
-        self.outputs_stale = true;
+        self.fresh = 0;
         if result.is_ok() && self.events.is_empty() {
             // The common case, kept short.
             if self.derivatives_given {
@@ -787,14 +881,14 @@ impl Instance {
     /// `fmi2SetTime` (s).
     pub fn set_time(&mut self, t: f64) -> Outcome {
         self.me_mut()?.set_time(t)?;
-        self.outputs_stale = true;
+        self.fresh = 0;
         Ok(fmi2OK)
     }
 
     /// `fmi2SetContinuousStates` (SI, `x` then `v`).
     pub fn set_continuous_states(&mut self, x: &[f64]) -> Outcome {
         self.me_mut()?.set_states(x)?;
-        self.outputs_stale = true;
+        self.fresh = 0;
         Ok(fmi2OK)
     }
 
@@ -813,8 +907,10 @@ impl Instance {
     /// `fmi2GetDerivatives` (SI) for `n` states.
     pub fn derivatives(&mut self, n: usize) -> Result<Vec<f64>, String> {
         check_count("nx", n, STATES.len())?;
-        if self.outputs_stale {
-            self.refresh_outputs()?;
+        let want = crate::md::DERIVATIVES.iter().fold(0, |w, &i| w | bit(i));
+        let missing = want & !self.fresh;
+        if missing != 0 {
+            self.refresh_outputs(missing)?;
         }
         Ok(crate::md::DERIVATIVES
             .iter()
@@ -842,7 +938,7 @@ impl Instance {
             return Ok(fmi2OK);
         }
         self.me_mut()?.enter_event_mode();
-        self.outputs_stale = true;
+        self.fresh = 0;
         self.lifecycle = Lifecycle::EventMode;
         Ok(fmi2OK)
     }
@@ -858,7 +954,7 @@ impl Instance {
         let me = self.me.as_mut().ok_or("no model (internal state lost)")?;
         let up = me.update(&self.values, &mut self.events)?;
         let next = me.next_event_time();
-        self.outputs_stale = true;
+        self.fresh = 0;
         self.log_events();
         *info = fmi2EventInfo {
             valuesOfContinuousStatesChanged: up.states_changed.into(),
@@ -1104,7 +1200,7 @@ impl Instance {
         self.stop_time = s.stop_time;
         self.last_successful_time = s.last_successful_time;
         self.terminated = s.terminated;
-        self.outputs_stale = true;
+        self.fresh = 0;
         self.model = model;
         self.me = me;
         Ok(fmi2OK)
@@ -1139,6 +1235,23 @@ impl Instance {
         drop(unsafe { Box::from_raw(h.cast::<Snapshot>()) });
         Ok(fmi2OK)
     }
+}
+
+/// Position in `VARS` of the value reference `vr`, which [`Instance::lookup`] accepted.
+fn vr_index(vr: fmi2ValueReference) -> usize {
+    match VARS.get(vr as usize) {
+        Some(v) if v.vr == vr => vr as usize,
+        _ => VARS.iter().position(|v| v.vr == vr).unwrap_or(0),
+    }
+}
+
+/// Whether variable `i` is computed by the model (an output, a state derivative or event
+/// indicator, or the time), rather than set.
+fn computed(i: usize) -> bool {
+    matches!(
+        VARS[i].causality,
+        Causality::Output | Causality::Local | Causality::Independent
+    )
 }
 
 /// Refuses an array length `n` (named `what`) other than `expected`.
@@ -1208,28 +1321,36 @@ fn step_refusal(tc: f64, h: f64, now: f64, stop: Option<f64>, span: f64, step_sp
 }
 
 /// Checks `value` against the type and range of variable `i` from the model description.
+#[inline]
 fn check_range(i: usize, value: f64) -> Result<f64, String> {
+    let v = &VARS[i];
+    let whole = v.kind == Kind::Real || value.fract() == 0.0;
+    if value.is_finite() && whole && (v.min..=v.max).contains(&value) {
+        Ok(value)
+    } else {
+        Err(out_of_range(i, value))
+    }
+}
+
+/// Refusal of `value` for variable `i` (see [`check_range`]).
+#[cold]
+fn out_of_range(i: usize, value: f64) -> String {
     let v = &VARS[i];
     let unit = if v.unit.is_empty() {
         String::new()
     } else {
         format!(" {}", v.unit)
     };
-    let whole = v.kind == Kind::Real || value.fract() == 0.0;
-    if value.is_finite() && whole && (v.min..=v.max).contains(&value) {
-        Ok(value)
-    } else {
-        Err(format!(
-            "{} = {}{unit} is out of range: must be {}in [{}, {}]{unit}",
-            v.name,
-            Num(value),
-            if v.kind == Kind::Real {
-                "finite and "
-            } else {
-                ""
-            },
-            Num(v.min),
-            Num(v.max)
-        ))
-    }
+    format!(
+        "{} = {}{unit} is out of range: must be {}in [{}, {}]{unit}",
+        v.name,
+        Num(value),
+        if v.kind == Kind::Real {
+            "finite and "
+        } else {
+            ""
+        },
+        Num(v.min),
+        Num(v.max)
+    )
 }

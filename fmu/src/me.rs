@@ -30,13 +30,14 @@ use std::ops::ControlFlow;
 use bistable_core::potential;
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Observer, Params, PlateMotion, Simulator,
-    Sinusoid, SolverOptions, State, StepView, StickCause, Well,
+    Sinusoid, SolverOptions, StepView, StickCause, Well,
 };
 
 use crate::md::var;
 use crate::model::{
     below_plate, describe_event, origin_in_range, plate_inputs, plate_piece, restore_phase_ref,
-    save_phase_ref, Observed, PlateInputs, Scale, Setup, ShakerMode, MAX_CLOCK_SPAN,
+    save_phase_ref, Mass, Observed, Plate, PlateInputs, Scale, Setup, ShakerMode, VarSet, ALL,
+    MAX_CLOCK_SPAN,
 };
 use crate::num::Num;
 
@@ -229,6 +230,17 @@ impl Me {
 
     /// The plate `(z, ż, z̈)` now (nondimensional).
     fn plate(&self, values: &[f64]) -> (f64, f64, f64) {
+        self.plate_of([values[var::z_in], values[var::zdot_in]])
+    }
+
+    /// Whether the computed values depend on the value of variable `i` (the inputs `z_in`,
+    /// `zdot_in` of the external plate; parameters act at the next event update).
+    pub fn reads_input(&self, i: usize) -> bool {
+        self.mode == ShakerMode::External && (i == var::z_in || i == var::zdot_in)
+    }
+
+    /// [`Me::plate`] with the inputs `z_in`, `zdot_in`.
+    fn plate_of(&self, [z_in, zdot_in]: [f64; 2]) -> (f64, f64, f64) {
         match self.mode {
             ShakerMode::Internal => {
                 PlateMotion::from(self.phase_ref).motion(Instant::new(self.s.tau))
@@ -236,8 +248,8 @@ impl Me {
             ShakerMode::External => {
                 let sc = &self.scale;
                 (
-                    sc.plate_coefficient(0, values[var::z_in]),
-                    sc.plate_coefficient(1, values[var::zdot_in]),
+                    sc.plate_coefficient(0, z_in),
+                    sc.plate_coefficient(1, zdot_in),
                     0.0,
                 )
             }
@@ -315,21 +327,17 @@ impl Me {
         [sc.dx, sc.velocity(1.0)]
     }
 
-    /// What the outputs are computed from.
-    fn observed(&self, values: &[f64]) -> Observed<'_> {
-        let (z, zdot, zddot) = self.plate(values);
+    /// What the outputs are computed from, with the inputs `z_in`, `zdot_in` (the plate is
+    /// evaluated only when asked).
+    fn observed(
+        &self,
+        inputs: [f64; 2],
+    ) -> Observed<'_, impl Fn() -> Mass + '_, impl Fn() -> Plate + '_> {
         Observed {
             params: &self.params,
-            state: State {
-                t: self.s.tau,
-                x: self.s.x,
-                v: self.s.v,
-                z,
-                zdot,
-                mode: self.s.contact,
-                well: self.s.well,
-            },
-            zddot,
+            tau: self.s.tau,
+            mass: || (self.s.x, self.s.v, self.s.contact, self.s.well),
+            plate: move || self.plate_of(inputs),
             impacts: self.s.impacts,
             snap_throughs: self.s.snap_throughs,
             last_impact: self.s.last_impact,
@@ -339,13 +347,21 @@ impl Me {
 
     /// Writes the outputs and the state derivatives into `values` (which holds the inputs).
     pub fn write_outputs(&self, values: &mut [f64]) {
-        let observed = self.observed(values);
-        observed.write(&self.scale, &self.phase_ref, values);
+        self.write_some(values, ALL);
+    }
+
+    /// Writes the variables of `want` (see [`Observed::write`]) into `values` (which holds the
+    /// inputs), evaluating only what they need.
+    pub fn write_some(&self, values: &mut [f64], want: VarSet) {
+        let inputs = [values[var::z_in], values[var::zdot_in]];
+        self.observed(inputs)
+            .write(&self.scale, &self.phase_ref, values, want);
     }
 
     /// `fmi2GetEventIndicators` (SI): gap (m) or contact force (m/s²), and `x − Δx/2` (m).
     pub fn indicators(&self, values: &[f64]) -> [f64; 2] {
-        self.observed(values).indicators(&self.scale)
+        self.observed([values[var::z_in], values[var::zdot_in]])
+            .indicators(&self.scale)
     }
 
     /// Whether the states have moved where event mode must act (`fmi2CompletedIntegratorStep`

@@ -469,8 +469,11 @@ impl Model {
                 ));
             }
         }
-        let mut out = values.to_vec();
-        self.write_outputs(&mut out)?;
+        // On the stack: this runs after every step that runs the core.
+        let mut buf = [0.0; 64];
+        let out = &mut buf[..values.len()];
+        out.copy_from_slice(values);
+        self.write_outputs(out)?;
         if let Some(k) = out.iter().position(|v| !v.is_finite()) {
             return Err(format!(
                 "the FMU state gives the non-finite output {} = {}",
@@ -723,20 +726,34 @@ impl Model {
 
     /// Writes every output variable (and the state derivatives) into `values`.
     pub fn write_outputs(&mut self, values: &mut [f64]) -> Result<(), String> {
-        self.sync()?;
-        let state = self.sim.state();
-        let stats = self.sim.stats();
-        let zddot = self.sim.plate().motion(self.sim.instant()).2;
+        self.write_some(values, ALL)
+    }
+
+    /// Writes the variables of `want` (see [`Observed::write`]) into `values`, evaluating only
+    /// what they need.
+    pub fn write_some(&mut self, values: &mut [f64], want: VarSet) -> Result<(), String> {
+        // At a communication time inside the core's current step the outputs come from that
+        // step as they would after advancing the core there (which only moves its time).
+        let now = match self.pending.map(Instant::new) {
+            Some(t) if self.sim.inside_step(t) => t,
+            _ => {
+                self.sync()?;
+                self.sim.instant()
+            }
+        };
+        let sim = &self.sim;
+        let stats = sim.stats();
         Observed {
-            params: self.sim.params(),
-            state,
-            zddot,
+            params: sim.params(),
+            tau: now.to_f64(),
+            mass: || sim.mass_at(now).unwrap_or_else(|| sim.mass()),
+            plate: || sim.plate().motion(now),
             impacts: stats.impacts,
             snap_throughs: stats.snap_throughs,
-            last_impact: self.sim.last_impact(),
+            last_impact: sim.last_impact(),
             impulse: self.impulse,
         }
-        .write(&self.scale, &self.phase_ref, values);
+        .write(&self.scale, &self.phase_ref, values, want);
         Ok(())
     }
 
@@ -807,14 +824,35 @@ pub fn describe_event(s: &Scale, phase_ref: &Sinusoid, e: &Event) -> String {
     }
 }
 
-/// What the outputs are computed from (nondimensional), for both interfaces.
-pub struct Observed<'a> {
+/// A set of variables: bit `i` stands for `VARS[i]` (the model has fewer than 64).
+pub(crate) type VarSet = u64;
+
+/// The set holding only variable `i`.
+pub(crate) const fn bit(i: usize) -> VarSet {
+    1 << i
+}
+
+/// Every variable.
+pub(crate) const ALL: VarSet = !0;
+
+/// Mass position and velocity, contact mode and well now (nondimensional).
+pub type Mass = (f64, f64, ContactMode, Well);
+
+/// Plate position, velocity and acceleration now (nondimensional).
+pub type Plate = (f64, f64, f64);
+
+/// What the outputs are computed from (nondimensional), for both interfaces. The mass and the
+/// plate are evaluated on demand, each at most once per [`Observed::write`]: a read of `x` and
+/// `v` in free flight evaluates the step's series only, not the plate's sinusoid.
+pub struct Observed<'a, M: Fn() -> Mass, P: Fn() -> Plate> {
     /// Model parameters.
     pub params: &'a Params,
-    /// Mass and plate now.
-    pub state: State,
-    /// Plate acceleration now.
-    pub zddot: f64,
+    /// Time now (`τ`).
+    pub tau: f64,
+    /// The mass now.
+    pub mass: M,
+    /// The plate now.
+    pub plate: P,
     /// Impacts so far.
     pub impacts: u64,
     /// Snap-throughs so far.
@@ -825,59 +863,125 @@ pub struct Observed<'a> {
     pub impulse: f64,
 }
 
-impl Observed<'_> {
-    /// Writes every output variable and the state derivatives `der_x`, `der_v` (SI).
-    pub fn write(&self, s: &Scale, phase_ref: &Sinusoid, values: &mut [f64]) {
-        let st = &self.state;
+/// `f()`, computed on the first call only.
+fn once<T: Copy>(cache: &mut Option<T>, f: impl FnOnce() -> T) -> T {
+    *cache.get_or_insert_with(f)
+}
+
+impl<M: Fn() -> Mass, P: Fn() -> Plate> Observed<'_, M, P> {
+    /// Writes the variables of `want` among the outputs, the state derivatives `der_x`,
+    /// `der_v`, the event indicators and `time` (SI); the others are left as they are.
+    pub fn write(&self, s: &Scale, phase_ref: &Sinusoid, values: &mut [f64], want: VarSet) {
+        let (mut mass_now, mut plate_now) = (None, None);
+        let mut mass = || once(&mut mass_now, &self.mass);
+        let mut plate = || once(&mut plate_now, &self.plate);
+        let wants = |i: usize| want & bit(i) != 0;
         let count = |n: u64| n.min(i32::MAX as u64) as f64;
-        let a = mass_acceleration(self.params, st, self.zddot);
-        let riding = st.mode == ContactMode::Sticking;
-        values[var::time] = s.time(st.t);
-        values[var::x] = s.length(st.x);
-        values[var::v] = s.velocity(st.v);
-        values[var::der_x] = s.velocity(if riding { st.zdot } else { st.v });
-        values[var::der_v] = s.acceleration(a);
-        values[var::z] = s.length(st.z);
-        values[var::zdot] = s.velocity(st.zdot);
-        values[var::kinetic_energy] = s.energy(st.kinetic_energy());
-        values[var::potential_energy] = s.energy(st.potential_energy());
-        values[var::impact_count] = count(self.impacts);
-        values[var::snap_through_count] = count(self.snap_throughs);
-        values[var::well] = f64::from(st.well.number());
-        values[var::in_contact] = f64::from(u8::from(riding));
-        let (t, phase, vb, va, dk) = match &self.last_impact {
-            Some(i) => (
-                s.time(i.t),
-                phase_of(phase_ref, i),
-                s.velocity(i.v_before),
-                s.velocity(i.v_after),
-                s.energy(i.delta_k),
-            ),
-            None => (0.0, 0.0, 0.0, 0.0, 0.0),
-        };
-        values[var::last_impact_time] = t;
-        values[var::last_impact_phase] = phase;
-        values[var::last_impact_v_before] = vb;
-        values[var::last_impact_v_after] = va;
-        values[var::last_impact_delta_k] = dk;
-        values[var::plate_impulse] = s.mass * s.velocity(self.impulse);
-        [
-            values[var::contact_indicator],
-            values[var::barrier_indicator],
-        ] = self.indicators(s);
+        if wants(var::time) {
+            values[var::time] = s.time(self.tau);
+        }
+        if wants(var::x) {
+            values[var::x] = s.length(mass().0);
+        }
+        if wants(var::v) {
+            values[var::v] = s.velocity(mass().1);
+        }
+        if wants(var::der_x) {
+            let riding = mass().2 == ContactMode::Sticking;
+            values[var::der_x] = s.velocity(if riding { plate().1 } else { mass().1 });
+        }
+        if wants(var::der_v) {
+            let (x, v, mode, _) = mass();
+            let a = match mode {
+                ContactMode::Sticking => plate().2,
+                ContactMode::Free => self.params.flight_acceleration(x, v),
+            };
+            values[var::der_v] = s.acceleration(a);
+        }
+        if wants(var::z) {
+            values[var::z] = s.length(plate().0);
+        }
+        if wants(var::zdot) {
+            values[var::zdot] = s.velocity(plate().1);
+        }
+        if wants(var::kinetic_energy) {
+            values[var::kinetic_energy] = s.energy(potential::kinetic(mass().1));
+        }
+        if wants(var::potential_energy) {
+            values[var::potential_energy] = s.energy(potential::energy(mass().0));
+        }
+        if wants(var::impact_count) {
+            values[var::impact_count] = count(self.impacts);
+        }
+        if wants(var::snap_through_count) {
+            values[var::snap_through_count] = count(self.snap_throughs);
+        }
+        if wants(var::well) {
+            values[var::well] = f64::from(mass().3.number());
+        }
+        if wants(var::in_contact) {
+            values[var::in_contact] = f64::from(u8::from(mass().2 == ContactMode::Sticking));
+        }
+        const IMPACT: VarSet = bit(var::last_impact_time)
+            | bit(var::last_impact_phase)
+            | bit(var::last_impact_v_before)
+            | bit(var::last_impact_v_after)
+            | bit(var::last_impact_delta_k);
+        if want & IMPACT != 0 {
+            let (t, phase, vb, va, dk) = match &self.last_impact {
+                Some(i) => (
+                    s.time(i.t),
+                    if wants(var::last_impact_phase) {
+                        phase_of(phase_ref, i)
+                    } else {
+                        0.0
+                    },
+                    s.velocity(i.v_before),
+                    s.velocity(i.v_after),
+                    s.energy(i.delta_k),
+                ),
+                None => (0.0, 0.0, 0.0, 0.0, 0.0),
+            };
+            for (i, value) in [
+                (var::last_impact_time, t),
+                (var::last_impact_phase, phase),
+                (var::last_impact_v_before, vb),
+                (var::last_impact_v_after, va),
+                (var::last_impact_delta_k, dk),
+            ] {
+                if wants(i) {
+                    values[i] = value;
+                }
+            }
+        }
+        if wants(var::plate_impulse) {
+            values[var::plate_impulse] = s.mass * s.velocity(self.impulse);
+        }
+        if wants(var::contact_indicator) {
+            values[var::contact_indicator] = contact_indicator(self.params, s, mass(), plate());
+        }
+        if wants(var::barrier_indicator) {
+            values[var::barrier_indicator] = s.length(mass().0 - potential::BARRIER);
+        }
     }
 
     /// The event indicators (SI): the gap `x − z` (m) in free flight or the contact force per
     /// unit mass (m/s², Eq. 9) while sticking, and `x − Δx/2` (m).
     pub fn indicators(&self, s: &Scale) -> [f64; 2] {
-        let st = &self.state;
-        let contact = match st.mode {
-            ContactMode::Free => s.length(st.x - st.z),
-            ContactMode::Sticking => {
-                s.acceleration(self.params.contact_force(st.z, st.zdot, self.zddot))
-            }
-        };
-        [contact, s.length(st.x - potential::BARRIER)]
+        let mass = (self.mass)();
+        [
+            contact_indicator(self.params, s, mass, (self.plate)()),
+            s.length(mass.0 - potential::BARRIER),
+        ]
+    }
+}
+
+/// The contact indicator (SI) of the mass and the plate: the gap `x − z` (m) in free flight or
+/// the contact force per unit mass (m/s², Eq. 9) while sticking.
+fn contact_indicator(params: &Params, s: &Scale, mass: Mass, (z, zdot, zddot): Plate) -> f64 {
+    match mass.2 {
+        ContactMode::Free => s.length(mass.0 - z),
+        ContactMode::Sticking => s.acceleration(params.contact_force(z, zdot, zddot)),
     }
 }
 
@@ -1194,6 +1298,88 @@ mod tests {
         m.write_outputs(&mut values).unwrap();
         for i in outputs {
             assert!(values[i].is_finite(), "{} not written", VARS[i].name);
+        }
+    }
+
+    #[test]
+    fn every_variable_has_a_bit() {
+        // `VarSet` and the output buffer of `check_physical` hold 64 variables.
+        assert!(VARS.len() <= 64, "{} variables", VARS.len());
+    }
+
+    /// Each computed variable written alone has the bits it has when all are written, in
+    /// flight and while riding the plate (chatter at Omega = 0.2, V = 0.05), both interfaces.
+    #[test]
+    fn outputs_on_demand_are_bit_identical_to_all_outputs() {
+        let mut values = defaults();
+        values[var::Omega] = 0.2;
+        values[var::V] = 0.05;
+        let computed: Vec<usize> = (0..VARS.len())
+            .filter(|&i| {
+                matches!(
+                    VARS[i].causality,
+                    Causality::Output | Causality::Local | Causality::Independent
+                )
+            })
+            .collect();
+        let same = |all: &[f64], one: &[f64], i: usize, t: f64| {
+            assert_eq!(
+                all[i].to_bits(),
+                one[i].to_bits(),
+                "{} at t = {t}: {} alone, {} with all",
+                VARS[i].name,
+                one[i],
+                all[i]
+            );
+        };
+        let mut events = Vec::new();
+        let none = [None; MAX_PLATE_ORDER + 1];
+        let mut m = Model::start(&values, &none, 0.0, &mut events).unwrap();
+        let (mut riding, mut flying, mut pending) = (0, 0, 0);
+        for k in 1..=3000 {
+            let t = f64::from(k) * 0.01;
+            m.step(t, &values, &none, &mut events, false).ok().unwrap();
+            // All of them from the core advanced to `t`; each alone from `m`, whose core may
+            // have been left behind (a step inside the core's current step only records its end).
+            let mut synced = m.clone();
+            synced.sync().unwrap();
+            let mut all = values.clone();
+            synced.write_outputs(&mut all).unwrap();
+            pending += usize::from(m.pending.is_some());
+            for &i in &computed {
+                let mut one = vec![f64::NAN; values.len()];
+                m.write_some(&mut one, bit(i)).unwrap();
+                same(&all, &one, i, t);
+            }
+            if all[var::in_contact] == 1.0 {
+                riding += 1;
+            } else {
+                flying += 1;
+            }
+        }
+        assert!(
+            riding > 100 && flying > 100,
+            "{riding} riding, {flying} in flight"
+        );
+        assert!(pending > 1000, "{pending} reads from a core left behind");
+        // Model Exchange, internal and external plate, at a few states.
+        for mode in [1.0, 2.0] {
+            values[var::shaker_mode] = mode;
+            values[var::z_in] = -0.01;
+            values[var::zdot_in] = -0.02;
+            let mut me = crate::me::Me::start(&values, 0.0).unwrap();
+            for (t, x, v) in [(0.5, 0.3, -0.1), (1.0, -0.7, 0.4), (2.0, 0.5, 0.0)] {
+                me.set_time(t).unwrap();
+                me.set_states(&[x, v]).unwrap();
+                let mut all = values.clone();
+                me.write_outputs(&mut all);
+                for &i in &computed {
+                    let mut one = values.clone();
+                    one[i] = f64::NAN;
+                    me.write_some(&mut one, bit(i));
+                    same(&all, &one, i, t);
+                }
+            }
         }
     }
 

@@ -3,7 +3,7 @@
  *
  *   host test  LIB.so modelDescription.xml   scenarios + scripted illegal calls; prints
  *                                            "N passed, M failed" and exits 1 on any failure
- *   host bench LIB.so modelDescription.xml   cost per fmi2DoStep, h = 0.01 vs one big step
+ *   host bench LIB.so modelDescription.xml   cost per communication step in FMI 2.0/3.0 host loops (bench.c)
  *   host fuzz  LIB.so modelDescription.xml SEEDS NCALLS
  *                                            random FMI call sequences with invariants (fuzz.c)
  *
@@ -378,129 +378,6 @@ double now(void) {
     struct timespec ts;
     clock_gettime(CLOCK_MONOTONIC, &ts);
     return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
-}
-
-/* Wall time of a run over [0, t_end] with steps of size h, best of `reps`. */
-static double timed(double t_end, double h, int reps, int read) {
-    double best = INFINITY;
-    for (int r = 0; r < reps; r++) {
-        fmi2Component c = started(1.75, 0.07, 0);
-        double t0 = now();
-        run_reading(c, 0, t_end, h, read);
-        double dt = now() - t0;
-        best = dt < best ? dt : best;
-        F.fmi2FreeInstance(c);
-    }
-    return best;
-}
-
-/* Wall time of a run over [0, t_end] with steps of size h in which the baseline sinusoid is
- * set through z_in, zdot_in before each step (external mode, sampled inputs, no derivatives)
- * or, with external = 0, set as the same two inputs of the internal mode (ignored there), so
- * both runs make the same calls; best of `reps`. */
-static double timed_inputs(double t_end, double h, int reps, int external) {
-    const double omega = 1.75, v = 0.07;
-    fmi2ValueReference in[2] = {vr("z_in"), vr("zdot_in")}, mode = vr("shaker_mode");
-    double best = INFINITY;
-    for (int r = 0; r < reps; r++) {
-        fmi2Component c = instantiate(fmi2False);
-        fmi2Integer m = external ? 2 : 1;
-        fmi2Real start[2] = {0.0, v};
-        if (!c || F.fmi2SetupExperiment(c, fmi2False, 0, 0.0, fmi2False, 0) != fmi2OK ||
-            F.fmi2SetInteger(c, &mode, 1, &m) != fmi2OK || F.fmi2SetReal(c, in, 2, start) != fmi2OK ||
-            F.fmi2EnterInitializationMode(c) != fmi2OK || F.fmi2ExitInitializationMode(c) != fmi2OK) {
-            fprintf(stderr, "bench: cannot start the external-mode instance\n");
-            exit(1);
-        }
-        long n = (long)(t_end / h + 0.5);
-        double t0 = now(), t = 0.0;
-        for (long k = 1; k <= n; k++) {
-            fmi2Real z[2] = {v / omega * sin(omega * t), v * cos(omega * t)};
-            double next = (double)k * h;
-            if (F.fmi2SetReal(c, in, 2, z) != fmi2OK || F.fmi2DoStep(c, t, next - t, fmi2True) != fmi2OK) {
-                fprintf(stderr, "bench: step failed at t = %g\n", t);
-                exit(1);
-            }
-            t = next;
-        }
-        double dt = now() - t0;
-        best = dt < best ? dt : best;
-        F.fmi2FreeInstance(c);
-    }
-    return best;
-}
-
-/* Wall time of the baseline over [0, t_end] with fmi3DoStep steps of size h (FMI 3.0
- * co-simulation; `early`: earlyReturnAllowed and eventModeUsed, every event an early return
- * followed by event mode), best of `reps`; `*returns` counts the early returns. */
-static double timed3(double t_end, double h, int reps, int early, long *returns) {
-    double best = INFINITY;
-    for (int r = 0; r < reps; r++) {
-        fmi3Instance c = F.fmi3InstantiateCoSimulation("bench", guid, NULL, false, false, early,
-                                                       early, NULL, 0, NULL, NULL, NULL);
-        bool need = false, term = false, ret = false, defined = false, changed = false;
-        double last = 0.0, next_event = 0.0;
-        if (!c || F.fmi3EnterInitializationMode(c, false, 0, 0.0, false, 0) != fmi3OK ||
-            F.fmi3ExitInitializationMode(c) != fmi3OK ||
-            (early && (F.fmi3UpdateDiscreteStates(c, &need, &term, &changed, &changed, &defined,
-                                                  &next_event) != fmi3OK ||
-                       F.fmi3EnterStepMode(c) != fmi3OK))) {
-            fprintf(stderr, "bench: cannot start the FMI 3.0 instance\n");
-            exit(1);
-        }
-        long n = (long)(t_end / h + 0.5);
-        *returns = 0;
-        double t0 = now(), t = 0.0;
-        for (long k = 1; k <= n; k++) {
-            double next = (double)k * h;
-            while (t < next) {
-                if (F.fmi3DoStep(c, t, next - t, true, &need, &term, &ret, &last) != fmi3OK) {
-                    fprintf(stderr, "bench: fmi3DoStep failed at t = %g\n", t);
-                    exit(1);
-                }
-                t = ret ? last : next;
-                *returns += ret;
-                if (need && (F.fmi3EnterEventMode(c) != fmi3OK ||
-                             F.fmi3UpdateDiscreteStates(c, &need, &term, &changed, &changed,
-                                                        &defined, &next_event) != fmi3OK ||
-                             F.fmi3EnterStepMode(c) != fmi3OK)) {
-                    fprintf(stderr, "bench: event mode failed at t = %g\n", t);
-                    exit(1);
-                }
-            }
-        }
-        double dt = now() - t0;
-        best = dt < best ? dt : best;
-        F.fmi3FreeInstance(c);
-    }
-    return best;
-}
-
-static void bench(void) {
-    const double t_end = 1000.0, h = 0.01;
-    timed(t_end, h, 1, 0); /* warm up */
-    double small = timed(t_end, h, 7, 0), big = timed(t_end, t_end, 7, 0);
-    double reading = timed(t_end, h, 7, 1);
-    long steps = (long)(t_end / h + 0.5);
-    printf("bench: tau_end=%g baseline Omega=1.75 V=0.07 (best of 7)\n", t_end);
-    printf("bench: one step of %g: %.3f ms\n", t_end, big * 1e3);
-    printf("bench: h=%g: %ld steps, %.3f ms, %.1f ns per fmi2DoStep, ratio to one step %.2f\n", h,
-           steps, small * 1e3, small / (double)steps * 1e9, small / big);
-    printf("bench: h=%g + fmi2GetReal(x, v) each step: %.3f ms, %.1f ns per step, ratio %.2f\n", h,
-           reading * 1e3, reading / (double)steps * 1e9, reading / big);
-    double internal = timed_inputs(t_end, h, 7, 0), sampled = timed_inputs(t_end, h, 7, 1);
-    printf("bench: h=%g + fmi2SetReal(z_in, zdot_in) each step, internal mode: %.3f ms, %.1f ns per step\n",
-           h, internal * 1e3, internal / (double)steps * 1e9);
-    printf("bench: h=%g sampled inputs, external mode (Hermite plate): %.3f ms, %.1f ns per step, "
-           "ratio to internal %.2f\n",
-           h, sampled * 1e3, sampled / (double)steps * 1e9, sampled / internal);
-    long returns = 0;
-    double fmi3 = timed3(t_end, h, 7, 0, &returns), early = timed3(t_end, h, 7, 1, &returns);
-    printf("bench: h=%g fmi3DoStep: %.3f ms, %.1f ns per step, ratio to fmi2DoStep %.2f\n", h,
-           fmi3 * 1e3, fmi3 / (double)steps * 1e9, fmi3 / small);
-    printf("bench: h=%g fmi3DoStep with early return and event mode: %.3f ms for %ld steps and "
-           "%ld early returns (each followed by event mode), ratio to fmi2DoStep %.2f\n",
-           h, early * 1e3, steps, returns, early / small);
 }
 
 int main(int argc, char **argv) {

@@ -32,12 +32,15 @@
     X(fmi2GetEventIndicators) X(fmi2GetContinuousStates)                                     \
     X(fmi2GetNominalsOfContinuousStates)
 
-/* The FMI 3.0 functions `host bench` times against fmi2DoStep (the FMI 3.0 host of
- * tests/fmu_host/fmi3 tests the whole FMI 3.0 interface). */
+/* The FMI 3.0 functions `host bench` times (the FMI 3.0 host of tests/fmu_host/fmi3 tests the
+ * whole FMI 3.0 interface). */
 #define FMI3_BENCH_FUNCTIONS(X)                                                               \
-    X(fmi3InstantiateCoSimulation) X(fmi3EnterInitializationMode)                             \
-    X(fmi3ExitInitializationMode) X(fmi3EnterStepMode) X(fmi3EnterEventMode)                 \
-    X(fmi3UpdateDiscreteStates) X(fmi3DoStep) X(fmi3FreeInstance)
+    X(fmi3InstantiateCoSimulation) X(fmi3InstantiateModelExchange)                           \
+    X(fmi3EnterInitializationMode) X(fmi3ExitInitializationMode) X(fmi3EnterStepMode)        \
+    X(fmi3EnterEventMode) X(fmi3UpdateDiscreteStates) X(fmi3DoStep) X(fmi3FreeInstance)      \
+    X(fmi3GetFloat64) X(fmi3SetFloat64) X(fmi3SetInt64) X(fmi3SetTime)                       \
+    X(fmi3SetContinuousStates) X(fmi3GetContinuousStateDerivatives) X(fmi3GetEventIndicators) \
+    X(fmi3GetContinuousStates) X(fmi3CompletedIntegratorStep) X(fmi3EnterContinuousTimeMode)
 
 struct fmi_table {
 #define FIELD(f) __typeof__(&f) f;
@@ -78,6 +81,10 @@ int me_settle(fmi2Component c, double *next);
 /* The ME driver: continuous-time mode from t0 to t_end with RK4 steps h, indicator sign changes
  * bisected to 1e-12 s, time event at `next`; `*events` counts event modes. 0 on success. */
 int me_run(fmi2Component c, double t0, double t_end, double h, double next, long *events);
+
+/* `host bench` (bench.c): the host-loop table (FMI 2.0 and 3.0, co-simulation and Model
+ * Exchange). */
+void bench(void);
 
 /* `host fuzz` (fuzz.c): arguments after the mode and the two paths. */
 int fuzz_main(const char *seeds, const char *ncalls);

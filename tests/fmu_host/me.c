@@ -24,18 +24,19 @@ static int deriv(fmi2Component c, double t, const double x[2], double d[2]) {
     return put(c, t, x) || F.fmi2GetDerivatives(c, d, 2) != fmi2OK ? -1 : 0;
 }
 
-/* One classical Runge-Kutta step of size h from (t, x) into y. */
+/* One classical Runge-Kutta step of size h from (t, x) into y. A refused call ends it at once
+ * (the derivatives it did not write are never passed on to the FMU). */
 static int rk4(fmi2Component c, double t, const double x[2], double h, double y[2]) {
     double k1[2], k2[2], k3[2], k4[2], a[2];
-    int bad = deriv(c, t, x, k1);
+    if (deriv(c, t, x, k1)) return -1;
     for (int i = 0; i < 2; i++) a[i] = x[i] + h / 2 * k1[i];
-    bad |= deriv(c, t + h / 2, a, k2);
+    if (deriv(c, t + h / 2, a, k2)) return -1;
     for (int i = 0; i < 2; i++) a[i] = x[i] + h / 2 * k2[i];
-    bad |= deriv(c, t + h / 2, a, k3);
+    if (deriv(c, t + h / 2, a, k3)) return -1;
     for (int i = 0; i < 2; i++) a[i] = x[i] + h * k3[i];
-    bad |= deriv(c, t + h, a, k4);
+    if (deriv(c, t + h, a, k4)) return -1;
     for (int i = 0; i < 2; i++) y[i] = x[i] + h / 6 * (k1[i] + 2 * k2[i] + 2 * k3[i] + k4[i]);
-    return bad;
+    return 0;
 }
 
 static int indicators(fmi2Component c, double t, const double x[2], double z[2]) {

@@ -513,6 +513,31 @@ impl Simulator {
         (x, v, mode, self.well)
     }
 
+    /// Whether `t` lies inside the current step, not before the current time: an advance to
+    /// `t` would only move the current time there (no step to compute, no event).
+    pub fn inside_step(&self, t: Instant) -> bool {
+        self.live && self.step.len > 0.0 && self.now <= t && self.t0 + self.step.len > t
+    }
+
+    /// The mass at `t` if `t` is [inside the current step](Simulator::inside_step): the values
+    /// [`Simulator::mass`] gives after an advance to `t`, without advancing.
+    pub fn mass_at(&self, t: Instant) -> Option<(f64, f64, ContactMode, Well)> {
+        if !self.inside_step(t) {
+            return None;
+        }
+        let s = t.since(self.t0);
+        if self.step.riding {
+            let (z, zdot, _) = self.plate.law().motion(t);
+            Some((z, zdot, ContactMode::Sticking, self.well))
+        } else if s > 0.0 {
+            let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
+            Some((x, v, ContactMode::Free, self.well))
+        } else {
+            let (z, zdot, _) = self.plate.law().motion(t);
+            Some((self.u0 + z, self.w0 + zdot, ContactMode::Free, self.well))
+        }
+    }
+
     /// Position, velocity and mode of the mass now; `plate` gives the plate's position and
     /// velocity now, asked only when they are needed.
     fn mass_with(&self, plate: impl FnOnce() -> (f64, f64)) -> (f64, f64, ContactMode) {
