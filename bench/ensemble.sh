@@ -6,7 +6,8 @@
 #      batch_throughput.rs);
 #   2. heyoka's batch mode against its scalar mode on the free flight (bench/heyoka_batch.py;
 #      heyoka from bench/requirements.txt, installed into .venv here), the peer's anchor;
-#   3. `bistable map` 60 x 40 (sensitivity test on) with --lanes 1, 4 and 8, twice each;
+#   3. `bistable map` 60 x 40 (sensitivity test on) with --lanes 1, 4 and 8, twice each, and a
+#      400-point bifurcation diagram's recorded runs with --lanes 1 and 4, twice each;
 #   4. with ENSEMBLE_FULL=1 also the 300 x 200 map and a 1,000 x 1,000 basins grid at
 #      (1.45, 0.05), --lanes 4 against --lanes 1 (about 25 minutes).
 # Wall and CPU (user) times from /usr/bin/time; CSVs compared in every column but the wall time.
@@ -67,6 +68,23 @@ for round in 1 2; do
 done
 same "$out/map60_1.csv" "$out/map60_4.csv"
 same "$out/map60_1.csv" "$out/map60_8.csv"
+
+echo "== 3b. bifurcation diagram, 400 points, both cores (no branches: the recorded runs only)"
+bif=(bifurcation --param omega --range 0.5:3.0:400 --velocity 0.07 --transient 2000 --record 200
+  --no-branches)
+echo "| run | lanes | wall (s) | CPU (s) |"
+echo "|---|---|---|---|"
+for round in 1 2; do
+  for lanes in 1 4; do
+    timed "bifurcation, round $round" "$lanes" "$out/bif_$lanes.csv" "${bif[@]}"
+  done
+done
+if cmp -s "$out/bif_1.csv" "$out/bif_4.csv"; then
+  echo "$out/bif_1.csv vs $out/bif_4.csv: identical bytes"
+else
+  echo "$out/bif_1.csv vs $out/bif_4.csv: DIFFERENT"
+  exit 1
+fi
 
 if [ "${ENSEMBLE_FULL:-0}" = 1 ]; then
   echo "== 4. map 300 x 200 and basins 1000 x 1000, both cores"
