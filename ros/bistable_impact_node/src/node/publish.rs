@@ -1,0 +1,229 @@
+//! What the loop publishes (state, clock, impacts, step answers) and the shutdown's wait for
+//! the impact subscribers' acknowledgements.
+
+use std::collections::{BTreeSet, VecDeque};
+use std::time::{Duration, Instant};
+
+use bistable_impact_node::control::StepJob;
+use bistable_impact_node::diagnostics::Counters;
+use bistable_impact_node::logging::{Log, LogLevel};
+use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, StepResponse};
+use bistable_impact_node::sim::Runner;
+use ros2_client::dds::rustdds::{
+    DomainParticipantStatusEvent, DomainParticipantStatusListener, StatusEvented, GUID,
+};
+use ros2_client::service::RmwRequestId;
+use ros2_client::{Publisher, WriteError};
+
+use super::dds::{Logger, Services};
+use super::serve::State;
+
+/// Publishes the state and the clock, each only while a subscription is matched.
+pub fn publish_tick(
+    runner: &Runner,
+    state_pub: &Publisher<MassState>,
+    clock_pub: &Publisher<Clock>,
+    n: &mut Counters,
+    log: &Logger,
+) {
+    // Nothing is built or serialized for a topic without a matched subscription (volatile: a
+    // later subscriber would not get it anyway).
+    let state_wanted = state_pub.matched_reader_count() > 0;
+    let clock_wanted = clock_pub.matched_reader_count() > 0;
+    n.states_unsubscribed += u64::from(!state_wanted);
+    if !state_wanted && !clock_wanted {
+        return;
+    }
+    let state = runner.state();
+    let clock = Clock {
+        clock: state.header.stamp,
+    };
+    if state_wanted {
+        match state_pub.publish(state) {
+            Ok(()) => n.states += 1,
+            Err(WriteError::WouldBlock { .. }) => n.states_dropped += 1,
+            Err(e) => {
+                n.states_dropped += 1;
+                log.log(LogLevel::Warn, &format!("mass state not published: {e}"));
+            }
+        }
+    }
+    if !clock_wanted {
+        return;
+    }
+    if let Err(e) = clock_pub.publish(clock) {
+        if !matches!(e, WriteError::WouldBlock { .. }) {
+            log.log(LogLevel::Warn, &format!("clock not published: {e}"));
+        }
+    }
+}
+
+/// Publishes the queued impacts in order; stops at the first one the subscribers cannot take
+/// yet (it stays queued).
+pub fn publish_impacts(
+    publisher: &Publisher<ImpactEvent>,
+    queue: &mut VecDeque<ImpactEvent>,
+    n: &mut Counters,
+    log: &Logger,
+) {
+    while let Some(msg) = queue.pop_front() {
+        let index = msg.index;
+        match publisher.publish(msg) {
+            Ok(()) => n.impacts += 1,
+            Err(WriteError::WouldBlock { data }) => {
+                queue.push_front(data);
+                return;
+            }
+            Err(e) => {
+                n.impacts_failed += 1;
+                log.log(
+                    LogLevel::Error,
+                    &format!("impact {index} not published: {e}"),
+                );
+            }
+        }
+    }
+}
+
+/// Answers a step request that ended before all its ticks were done.
+pub fn answer_step(sv: &Services, st: &State, job: StepJob<RmwRequestId>, why: &str, log: &Logger) {
+    let message = format!(
+        "step stopped after {} of {} ticks at t = {} s: {why}",
+        job.done,
+        job.ticks,
+        st.runner.now()
+    );
+    log.log(LogLevel::Warn, &message);
+    let resp = StepResponse {
+        success: false,
+        message,
+        t: st.runner.now(),
+        impact_count: st.runner.impact_count(),
+    };
+    if let Err(e) = sv.step.send_response(job.id, resp) {
+        log.log(LogLevel::Warn, &format!("step: response not sent: {e}"));
+    }
+}
+
+/// Answers a step request whose ticks are all done.
+pub fn answer_step_done(sv: &Services, st: &State, job: StepJob<RmwRequestId>, log: &Logger) {
+    let t = st.runner.now();
+    let resp = StepResponse {
+        success: true,
+        message: format!("stepped {} ticks to t = {t} s", job.ticks),
+        t,
+        impact_count: st.runner.impact_count(),
+    };
+    log.log(LogLevel::Info, &resp.message);
+    if let Err(e) = sv.step.send_response(job.id, resp) {
+        log.log(LogLevel::Warn, &format!("step: response not sent: {e}"));
+    }
+}
+
+/// How often the loop reads the participant's status events (matched subscriptions).
+pub const STATUS_POLL: Duration = Duration::from_millis(100);
+
+/// The remote subscriptions matched to one local writer, from the participant's status
+/// events (the node runs no ros2-client spinner, which would keep this graph).
+pub struct MatchedReaders {
+    writer: GUID,
+    readers: BTreeSet<GUID>,
+}
+
+impl MatchedReaders {
+    pub fn new(writer: GUID) -> Self {
+        Self {
+            writer,
+            readers: BTreeSet::new(),
+        }
+    }
+
+    pub fn update(&mut self, status: &DomainParticipantStatusListener) {
+        while let Some(event) = status.try_recv_status() {
+            match event {
+                DomainParticipantStatusEvent::RemoteReaderMatched {
+                    local_writer,
+                    remote_reader,
+                } if local_writer == self.writer => {
+                    self.readers.insert(remote_reader);
+                }
+                DomainParticipantStatusEvent::ReaderLost { guid, .. } => {
+                    self.readers.remove(&guid);
+                }
+                DomainParticipantStatusEvent::ParticipantLost { id, .. } => {
+                    self.readers.retain(|g| g.prefix != id);
+                }
+                _ => {}
+            }
+        }
+    }
+
+    pub fn count(&self) -> usize {
+        self.readers.len()
+    }
+}
+
+/// At shutdown DDS keeps running while the matched reliable impact subscribers acknowledge the
+/// published impacts: until all are acknowledged, or no further acknowledgement came for
+/// [`SHUTDOWN_ACK_STALL`] (a subscriber that vanished without a goodbye acknowledges nothing
+/// until DDS drops it at its lease expiry), or [`SHUTDOWN_ACK_LIMIT`] in all.
+const SHUTDOWN_ACK_STALL: Duration = Duration::from_secs(2);
+/// See [`SHUTDOWN_ACK_STALL`].
+const SHUTDOWN_ACK_LIMIT: Duration = Duration::from_secs(10);
+
+/// Waits for the impact subscribers' acknowledgements at shutdown ([`SHUTDOWN_ACK_STALL`]) and
+/// logs the outcome: all `published` impacts acknowledged, or how many were not.
+pub fn await_acknowledgements(
+    publisher: &Publisher<ImpactEvent>,
+    subscribers: usize,
+    published: u64,
+    log: &Logger,
+) {
+    let start = Instant::now();
+    let mut progress = start;
+    let mut missing = publisher.unacknowledged_count();
+    loop {
+        match publisher.wait_for_acknowledgments(Duration::from_millis(100)) {
+            Ok(true) => {
+                if subscribers > 0 {
+                    log.log(
+                        LogLevel::Info,
+                        &format!(
+                            "impacts: all {published} published acknowledged by the {subscribers} \
+                             matched subscriptions in {:.3} s",
+                            start.elapsed().as_secs_f64()
+                        ),
+                    );
+                }
+                return;
+            }
+            Ok(false) => {}
+            Err(e) => {
+                log.log(
+                    LogLevel::Warn,
+                    &format!("impacts: cannot wait for acknowledgements: {e}"),
+                );
+                return;
+            }
+        }
+        let now = Instant::now();
+        let left = publisher.unacknowledged_count();
+        if left < missing {
+            missing = left;
+            progress = now;
+        }
+        if now - progress >= SHUTDOWN_ACK_STALL || now - start >= SHUTDOWN_ACK_LIMIT {
+            log.log(
+                LogLevel::Warn,
+                &format!(
+                    "impacts: {left} of {published} published not acknowledged by every matched \
+                     subscription after {:.3} s ({} s without progress, or {} s in all)",
+                    (now - start).as_secs_f64(),
+                    SHUTDOWN_ACK_STALL.as_secs(),
+                    SHUTDOWN_ACK_LIMIT.as_secs()
+                ),
+            );
+            return;
+        }
+    }
+}
