@@ -302,7 +302,8 @@ pub fn covers(trace: &[ArcPoint], omega: f64, x: f64, v: f64, tol: f64) -> bool 
 /// Pseudo-arclength traces through every orbit in `found` (seed and orbit, ordered by grid
 /// point; `models[seed.point]` is its model) not already on a trace, in both directions (two
 /// threads), joined into one polyline each (decreasing-Ω part reversed, so each trace starts
-/// at its low-Ω end unless it turns). Traces of a single point are dropped.
+/// at its low-Ω end unless it turns). A trace ends where it runs onto an earlier one (at the
+/// first orbit within [`COVERED`] of it). Traces of a single point are dropped.
 pub fn traces(
     models: &[Model],
     found: &[(Seed, Orbit)],
@@ -322,9 +323,23 @@ pub fn traces(
             let f = trace(model, start, 1.0, o);
             (b.join().expect("trace thread"), f)
         });
-        let mut back = back?;
+        // A part that runs onto an earlier trace (another seed's branch, met at a grazing
+        // corner or a fold) ends at the first orbit it shares with it, so that no stretch of a
+        // branch is drawn or counted twice.
+        let joined = |a: &ArcPoint| {
+            traces
+                .iter()
+                .any(|t| covers(t, a.omega, a.x0, a.v0, COVERED))
+        };
+        let until_joined = |mut part: Vec<ArcPoint>| {
+            if let Some(i) = part.iter().skip(1).position(joined) {
+                part.truncate(i + 2);
+            }
+            part
+        };
+        let mut back = until_joined(back?);
         back.reverse();
-        back.extend(fwd?.into_iter().skip(1));
+        back.extend(until_joined(fwd?).into_iter().skip(1));
         if back.len() > 1 {
             traces.push(back);
         }

@@ -550,6 +550,13 @@ fn draw(
     if barrier {
         legend.push((Mark::Dashed(BARRIER), "barrier x = ½".to_string()));
     }
+    let grazing: Vec<(f64, f64)> = all.iter().flat_map(|(_, c)| grazing_points(c)).collect();
+    if !grazing.is_empty() {
+        legend.push((
+            Mark::Ring(GRAZING, 5),
+            "impacts per period change (grazing)".to_string(),
+        ));
+    }
     let area = header(
         root,
         &format!(
@@ -591,5 +598,28 @@ fn draw(
             }
         }
     }
+    chart.draw_series(
+        grazing
+            .iter()
+            .map(|&p| Circle::new(p, 5, GRAZING.stroke_width(2))),
+    )?;
     Ok(())
+}
+
+/// Colour of the marks where the impacts per period change along a trace.
+const GRAZING: RGBColor = RGBColor(30, 30, 30);
+
+/// `(Ω, x_max)` of every traced orbit whose number of impacts differs from the one before it on
+/// its trace: the branch crossed a grazing contact there (an impact appeared or vanished), where
+/// it has a kink and can turn steeply.
+fn grazing_points(c: &Curves) -> Vec<(f64, f64)> {
+    let Curves::Arclength(traces) = c else {
+        return Vec::new();
+    };
+    traces
+        .iter()
+        .flat_map(|t| t.windows(2))
+        .filter(|w| w[0].impacts != w[1].impacts)
+        .map(|w| (w[1].omega, w[1].max_x))
+        .collect()
 }

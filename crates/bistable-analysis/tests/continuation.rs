@@ -1,0 +1,52 @@
+//! Pseudo-arclength continuation over the paper's low-Ω range at V = 0.03, where a 3-impact and
+//! a 2-impact branch meet at a grazing contact: every traced stretch of a branch appears once.
+
+use bistable_analysis::arclength::covers;
+use bistable_analysis::continuation::{continue_orbits, Curves, Method};
+use bistable_analysis::parallel::Threads;
+use bistable_analysis::Model;
+use bistable_core::{Params, SimError, Sinusoid, SolverOptions, Width};
+
+/// Max-norm distance in `(x, x')` within which two orbits at one Ω are the same.
+const SAME: f64 = 5e-3;
+
+#[test]
+fn no_trace_runs_along_an_earlier_one() {
+    let models: Vec<Model> = (0..21)
+        .map(|i| {
+            let w = 0.6 + 0.02 * f64::from(i);
+            Model::new(
+                Params::paper(),
+                Sinusoid::new(w, 0.03).unwrap(),
+                SolverOptions::default(),
+            )
+        })
+        .collect();
+    let curves = continue_orbits::<SimError>(
+        &models,
+        1,
+        2000,
+        Method::Arclength,
+        Threads::new(2).unwrap(),
+        Width::preferred(),
+        &mut |_| Ok(()),
+    )
+    .unwrap();
+    let Curves::Arclength(traces) = curves else {
+        panic!("arclength continuation gives traces");
+    };
+    assert!(traces.len() >= 2, "{} traces", traces.len());
+    // Both impact counts of the grazing corner are on some trace.
+    let impacts: Vec<u64> = traces.iter().flatten().map(|p| p.impacts).collect();
+    assert!(impacts.contains(&3) && impacts.contains(&2), "{impacts:?}");
+    for (k, t) in traces.iter().enumerate() {
+        for earlier in &traces[..k] {
+            // A later trace may touch an earlier one at its ends (where it joined it), no more.
+            let shared = t[1..t.len() - 1]
+                .iter()
+                .filter(|p| covers(earlier, p.omega, p.x0, p.v0, SAME))
+                .count();
+            assert_eq!(shared, 0, "trace {k} runs along an earlier trace");
+        }
+    }
+}
