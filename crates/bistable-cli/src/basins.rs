@@ -2,8 +2,7 @@
 //! plate phase for one shaker point `(Ω, V)`, computed in parallel, written row by row to a
 //! resumable CSV file, drawn as a PNG, with the attractors and the uncertainty exponent.
 
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant as WallClock;
 
 use clap::{ArgGroup, Args};
@@ -15,14 +14,13 @@ use bistable_analysis::basins::{
     uncertainty_samples, Attractor, Cell, Uncertain,
 };
 use bistable_analysis::sensitivity::Outcome;
-use bistable_analysis::sweep::interleaved;
 use bistable_analysis::Model;
 use bistable_core::{ClassifyOptions, ResponseClass, Well};
 
 use crate::common::{lanes, threads, CommonArgs};
 use crate::error::CliError;
-use crate::map::OutLock;
-use crate::output::{print_json, print_text, CsvFile, Field};
+use crate::grid::{Computed, GridFile, GridRun};
+use crate::output::{print_json, print_text, Field};
 use crate::plot::{self, header, Area, DrawResult, FONT};
 use crate::progress::Progress;
 use crate::ranges::{Range, MAX_POINTS};
@@ -203,12 +201,6 @@ struct Summary {
     plot: Option<PathBuf>,
 }
 
-type Key = (u64, u64);
-
-fn key(x: f64, v: f64) -> Key {
-    (x.to_bits(), v.to_bits())
-}
-
 fn label(a: &Attractor) -> String {
     let mut s = a.steady.label();
     if let Some(x) = a.anchor {
@@ -262,64 +254,32 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     let threads = threads(args.threads, "--threads")?;
     let width = lanes(args.lanes, "--lanes")?;
 
-    let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
-    let mut done: HashMap<Key, Cell> = HashMap::new();
-    if let Some(out) = &args.out {
-        for c in read_existing(out, &model, phase)? {
-            done.insert(key(c.x0, c.v0), c);
-        }
-    }
-    let grid: Vec<(f64, f64)> = interleaved(xs.n * vs.n)
-        .map(|k| (xs.value(k % xs.n), vs.value(k / xs.n)))
-        .collect();
-    let resumed = grid
-        .iter()
-        .filter(|&&(x, v)| done.contains_key(&key(x, v)))
-        .count();
-    let todo: Vec<(f64, f64)> = grid
-        .iter()
-        .copied()
-        .filter(|&(x, v)| !done.contains_key(&key(x, v)))
-        .collect();
+    let mut run = GridRun::open(
+        GridFile {
+            columns: &COLUMNS,
+            kind: "basins",
+            axes: ["x0", "x0'"],
+        },
+        args.out.as_deref(),
+        (xs, vs),
+        |c: &Cell| (c.x0, c.v0),
+        |text, row| parse_row(text, &model, phase).map_err(|e| format!("has a bad row {row}: {e}")),
+    )?;
 
     let start = WallClock::now();
-    let mut csv = match &args.out {
-        Some(p) if p.exists() => Some(CsvFile::append(p)?),
-        Some(p) => Some(CsvFile::create(p, &COLUMNS.join(","))?),
-        None => None,
-    };
-    let mut failed = Vec::new();
-    let mut computed = 0usize;
-    let mut progress = Progress::new(todo.len() as f64, format!("basins: {} starts", todo.len()));
-    classify_starts(&model, phase, co, &todo, threads, width, |i, r| {
-        match r {
-            Ok(cell) => {
-                if let Some(c) = csv.as_mut() {
-                    c.row(&row(&cell, &model, phase))?;
-                    c.flush()?;
-                }
-                done.insert(key(cell.x0, cell.v0), cell);
-                computed += 1;
-            }
-            Err(e) => failed.push((todo[i], CliError::from(e))),
-        }
-        progress.set((computed + failed.len()) as f64);
-        Ok::<(), CliError>(())
-    })?;
-    progress.finish();
-    if let Some(c) = csv {
-        c.finish()?;
-    }
-    for ((x, v), e) in &failed {
-        eprintln!("warning: x0 = {x}, x0' = {v}: {e}");
-    }
+    let Computed { computed, failed } = run.compute(
+        format!("basins: {} starts", run.todo.len()),
+        |c, cell| c.row(&row(cell, &model, phase)),
+        |todo, done| {
+            classify_starts(&model, phase, co, todo, threads, width, |i, r| {
+                done(i, r.map_err(CliError::from))
+            })
+        },
+    )?;
 
     // Attractors over the grid's cells, in grid order.
     let cells: Vec<Cell> = (0..xs.n * vs.n)
-        .filter_map(|k| {
-            done.get(&key(xs.value(k % xs.n), vs.value(k / xs.n)))
-                .copied()
-        })
+        .filter_map(|k| run.get((xs.value(k % xs.n), vs.value(k / xs.n))).copied())
         .collect();
     let (attractors, index) = identify(&cells);
 
@@ -361,9 +321,9 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
         x_range: xs.to_string(),
         v_range: vs.to_string(),
         plate_x,
-        points: grid.len(),
+        points: run.grid.len(),
         computed,
-        resumed,
+        resumed: run.resumed,
         failed: failed.len(),
         threads: threads.get(),
         lanes: width.lanes(),
@@ -412,7 +372,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
         return Err(CliError::Failed(format!(
             "{} of {} starts failed (listed above); the others are saved",
             failed.len(),
-            todo.len()
+            run.todo.len()
         )));
     }
     Ok(())
@@ -438,19 +398,6 @@ fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
         Field::flag(c.at_rest),
         Field::F(c.periods_simulated),
     ]
-}
-
-/// The cells already in `path` (none if it does not exist); drops an incomplete last line;
-/// refuses a file with another header or another Ω, V, phase, ζ or e.
-fn read_existing(path: &Path, model: &Model, phase: f64) -> Result<Vec<Cell>, CliError> {
-    let mut cells = Vec::new();
-    crate::output::read_resumable(path, &COLUMNS.join(","), "basins", |text| {
-        let c = parse_row(text, model, phase)
-            .map_err(|e| format!("has a bad row {}: {e}", cells.len() + 2))?;
-        cells.push(c);
-        Ok(())
-    })?;
-    Ok(cells)
 }
 
 fn parse_row(text: &str, model: &Model, phase: f64) -> Result<Cell, String> {

@@ -1,7 +1,7 @@
 //! `bistable map`: the response-class map of the paper's Fig. 9 over an `Ω × V` grid, computed
 //! in parallel, written row by row to a resumable CSV file and drawn as a PNG.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant as WallClock;
 
@@ -9,18 +9,17 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::sensitivity::SensitivityOptions;
-use bistable_analysis::sweep::{classify_points_with, interleaved};
+use bistable_analysis::sweep::classify_points_with;
 use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
-use bistable_analysis::{Model, Threads};
-use bistable_core::{ClassifyOptions, Width};
+use bistable_analysis::Model;
+use bistable_core::ClassifyOptions;
 
 use crate::classify::{ClassifyArgs, Record, RecordCsv, CSV_COLUMNS};
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
-use crate::output::{print_json, print_text, CsvFile};
+use crate::grid::{Computed, GridFile, GridRun};
+use crate::output::{print_json, print_text};
 use crate::plot::{self, halo_segments, header, Area, DrawResult, Mark, FONT};
-use crate::progress::Progress;
 use crate::ranges::{Range, MAX_POINTS};
 
 /// Lyapunov periods of an aperiodic point in a map unless `--lyapunov-periods` says otherwise.
@@ -159,12 +158,6 @@ struct Summary {
     plot: Option<PathBuf>,
 }
 
-type Key = (u64, u64);
-
-fn key(omega: f64, velocity: f64) -> Key {
-    (omega.to_bits(), velocity.to_bits())
-}
-
 /// Runs `bistable map`.
 pub fn run(args: &MapArgs) -> Result<(), CliError> {
     let omegas = args
@@ -186,42 +179,45 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
     let threads = threads(args.threads, "--threads")?;
     let width = lanes(args.lanes, "--lanes")?;
 
-    let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
-    let mut done: HashMap<Key, Record> = HashMap::new();
-    if let Some(out) = &args.out {
-        for r in read_existing(out, &model)? {
-            done.insert(key(r.omega, r.velocity), r);
-        }
-    }
-    let grid: Vec<(f64, f64)> = interleaved(omegas.n * vs.n)
-        .map(|k| (omegas.value(k % omegas.n), vs.value(k / omegas.n)))
-        .collect();
-    let in_grid: HashSet<Key> = grid.iter().map(|&(w, v)| key(w, v)).collect();
-    let resumed = done.keys().filter(|k| in_grid.contains(k)).count();
-    let todo: Vec<(f64, f64)> = grid
-        .iter()
-        .copied()
-        .filter(|&(w, v)| !done.contains_key(&key(w, v)))
-        .collect();
+    let mut run = GridRun::open(
+        GridFile {
+            columns: &CSV_COLUMNS,
+            kind: "map",
+            axes: ["Ω", "V"],
+        },
+        args.out.as_deref(),
+        (omegas, vs),
+        |r: &Record| (r.omega, r.velocity),
+        |text, row| {
+            let cells: Vec<&str> = text.split(',').collect();
+            let r = Record::from_csv(&cells).map_err(|e| format!("has a bad row {row}: {e}"))?;
+            if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
+                return Err(format!(
+                    "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
+                     another file",
+                    r.zeta,
+                    r.restitution,
+                    model.params.zeta(),
+                    model.restitution()
+                ));
+            }
+            Ok(r)
+        },
+    )?;
 
     let start = WallClock::now();
-    let (computed, failed) = compute(
-        &todo,
-        &model,
-        co,
-        so,
-        (threads, width),
-        args.out.as_deref(),
-        |r| {
-            done.insert(key(r.omega, r.velocity), r);
+    let Computed { computed, failed } = run.compute(
+        format!("classifying {} points", run.todo.len()),
+        |c, r| c.row(&r.fields()),
+        |todo, done| {
+            classify_points_with(&model, todo, co, so, threads, width, |i, r| {
+                done(i, r.map(|p| Record::new(&p)).map_err(CliError::from))
+            })
         },
     )?;
     let wall = start.elapsed().as_secs_f64();
 
-    let records: Vec<&Record> = grid
-        .iter()
-        .filter_map(|&(w, v)| done.get(&key(w, v)))
-        .collect();
+    let records: Vec<&Record> = run.grid.iter().filter_map(|&p| run.get(p)).collect();
     if let Some(path) = &args.plot {
         draw(path, &model, omegas, vs, &records, &failed, co)?;
     }
@@ -234,9 +230,9 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         velocity_range: vs.to_string(),
         restitution: model.restitution(),
         zeta: model.params.zeta(),
-        points: grid.len(),
+        points: run.grid.len(),
         computed,
-        resumed,
+        resumed: run.resumed,
         failed: failed.len(),
         threads: threads.get(),
         lanes: width.lanes(),
@@ -272,121 +268,10 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         return Err(CliError::Failed(format!(
             "{} of {} points failed (listed above); the others are saved",
             failed.len(),
-            todo.len()
+            run.todo.len()
         )));
     }
     Ok(())
-}
-
-/// `FILE.csv.lock` holding this process's id while it appends to `FILE.csv`, so that two runs
-/// cannot interleave their rows. A lock left by a process that no longer runs (killed) is
-/// taken over.
-pub(crate) struct OutLock(PathBuf);
-
-impl OutLock {
-    pub(crate) fn take(out: &Path) -> Result<Self, CliError> {
-        let path = PathBuf::from(format!("{}.lock", out.display()));
-        if let Ok(text) = std::fs::read_to_string(&path) {
-            let pid = text.trim();
-            let alive = !pid.is_empty()
-                && pid != std::process::id().to_string()
-                && Path::new("/proc").join(pid).exists();
-            if alive {
-                return Err(CliError::invalid_text(
-                    "--out",
-                    out.display(),
-                    format!(
-                        "is being written by another run (process {pid}, see {}); wait for it or                          stop it",
-                        path.display()
-                    ),
-                ));
-            }
-        }
-        crate::output::create_parent(&path)?;
-        std::fs::write(&path, std::process::id().to_string())
-            .map_err(|e| CliError::io("cannot write", &path, e))?;
-        Ok(Self(path))
-    }
-}
-
-impl Drop for OutLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
-
-/// The rows already in `path` (none if it does not exist). Drops an incomplete last line (an
-/// interrupted write) from the file; refuses a file with another header or other `ζ`, `e`.
-fn read_existing(path: &Path, model: &Model) -> Result<Vec<Record>, CliError> {
-    let mut records = Vec::new();
-    crate::output::read_resumable(path, &CSV_COLUMNS.join(","), "map", |text| {
-        let cells: Vec<&str> = text.split(',').collect();
-        let r = Record::from_csv(&cells)
-            .map_err(|e| format!("has a bad row {}: {e}", records.len() + 2))?;
-        if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
-            return Err(format!(
-                "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
-                 another file",
-                r.zeta,
-                r.restitution,
-                model.params.zeta(),
-                model.restitution()
-            ));
-        }
-        records.push(r);
-        Ok(())
-    })?;
-    Ok(records)
-}
-
-/// Classifies `todo` on `threads` workers of `width` lanes with a progress bar; each finished
-/// record goes to
-/// `out` (flushed at once) and to `sink`. Returns the number computed and the points that
-/// failed (reported on stderr).
-fn compute(
-    todo: &[(f64, f64)],
-    model: &Model,
-    co: ClassifyOptions,
-    so: SensitivityOptions,
-    (threads, width): (Threads, Width),
-    out: Option<&Path>,
-    mut sink: impl FnMut(Record),
-) -> Result<(usize, Vec<(f64, f64)>), CliError> {
-    let mut csv = match out {
-        Some(p) if p.exists() => Some(CsvFile::append(p)?),
-        Some(p) => Some(CsvFile::create(p, &CSV_COLUMNS.join(","))?),
-        None => None,
-    };
-    if let Some(c) = csv.as_mut() {
-        c.flush()?;
-    }
-    let mut failed = Vec::new();
-    let mut computed = 0usize;
-    let mut progress = Progress::new(
-        todo.len() as f64,
-        format!("classifying {} points", todo.len()),
-    );
-    classify_points_with(model, todo, co, so, threads, width, |i, r| {
-        match r {
-            Ok(point) => {
-                let rec = Record::new(&point);
-                if let Some(c) = csv.as_mut() {
-                    c.row(&rec.fields())?;
-                    c.flush()?;
-                }
-                computed += 1;
-                sink(rec);
-            }
-            Err(e) => failed.push((todo[i], CliError::from(e))),
-        }
-        progress.set((computed + failed.len()) as f64);
-        Ok::<(), CliError>(())
-    })?;
-    progress.finish();
-    for ((w, v), e) in &failed {
-        eprintln!("warning: Ω = {w}, V = {v}: {e}");
-    }
-    Ok((computed, failed.into_iter().map(|f| f.0).collect()))
 }
 
 fn human(s: &Summary) -> String {
