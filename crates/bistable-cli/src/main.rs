@@ -13,7 +13,8 @@
 //! - `grid.rs`: the resumable grid driver of `map` and `basins` (skip the points in `--out`,
 //!   compute the others with a progress bar, append their rows as they complete);
 //! - `progress.rs`: progress bars on stderr for long runs;
-//! - `plot.rs`: PNG figures;
+//! - `plot/`: PNG figures: `plot/mod.rs` the helpers every figure uses, `plot/simulate.rs`
+//!   `simulate`'s figures (the other commands draw theirs in their own modules);
 //! - `ranges.rs`: `A:B:N` parameter ranges;
 //! - `simulate.rs`: `bistable simulate`;
 //! - `classify.rs`: `bistable classify` (and the classification record `map` writes);
