@@ -6,14 +6,98 @@
 //! the CSV columns, how a row is read and written, and the computation.
 
 use std::collections::HashMap;
-use std::path::Path;
+use std::path::{Path, PathBuf};
+
+use clap::{Arg, Args};
+use serde::Serialize;
 
 use bistable_analysis::sweep::interleaved;
+use bistable_analysis::Threads;
+use bistable_core::Width;
 
+use crate::common::{lanes, threads};
 use crate::error::CliError;
 use crate::output::{read_resumable, CsvFile, OutLock};
 use crate::progress::Progress;
-use crate::ranges::Range;
+use crate::ranges::{Range, MAX_POINTS};
+
+/// The output and worker options of a grid command (flattened into its options; each command
+/// words the help of `--out` and `--plot` for its own points with [`grid_help`]).
+#[derive(Debug, Clone, Args)]
+pub struct GridArgs {
+    /// Append one row per point to FILE.csv, skipping points already in it.
+    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
+    pub out: Option<PathBuf>,
+
+    /// Draw the grid to FILE.png.
+    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
+    pub plot: Option<PathBuf>,
+
+    /// Worker threads [default: all cores].
+    #[arg(long, value_name = "N")]
+    pub threads: Option<usize>,
+
+    /// Trajectories each thread advances together in SIMD lanes: 1 (one at a time), 4 (AVX2)
+    /// or 8 (AVX-512) [default: 4]. The results are the same for every width.
+    #[arg(long, value_name = "N")]
+    pub lanes: Option<usize>,
+}
+
+/// For `#[command(mut_args(grid_help(out, plot)))]`: the help of `--out` and `--plot` (changed
+/// in place, so that the options keep their order in `--help`).
+pub(crate) fn grid_help(out: &'static str, plot: &'static str) -> impl FnMut(Arg) -> Arg {
+    move |a| match a.get_id().as_str() {
+        "out" => a.help(out),
+        "plot" => a.help(plot),
+        _ => a,
+    }
+}
+
+impl GridArgs {
+    /// The checked `--threads` and `--lanes`.
+    pub(crate) fn parallel(&self) -> Result<(Threads, Width), CliError> {
+        Ok((
+            threads(self.threads, "--threads")?,
+            lanes(self.lanes, "--lanes")?,
+        ))
+    }
+}
+
+/// The counts of a grid run, in the command's JSON summary (flattened into it).
+#[derive(Debug, Serialize)]
+pub(crate) struct GridSummary {
+    pub points: usize,
+    pub computed: usize,
+    pub resumed: usize,
+    pub failed: usize,
+    pub threads: usize,
+    /// Trajectories per thread in SIMD lanes.
+    pub lanes: usize,
+    pub wall_time_s: f64,
+}
+
+impl GridSummary {
+    /// `N points, N computed, N resumed, N failed` with the command's word for its points and
+    /// for the resumed ones.
+    pub(crate) fn counts(&self, points: &str, resumed: &str) -> String {
+        format!(
+            "{} {points}, {} computed, {} {resumed}, {} failed",
+            self.points, self.computed, self.resumed, self.failed
+        )
+    }
+}
+
+/// Refuses a grid of `a × b` with more than [`MAX_POINTS`] points (naming `option`, `a`'s).
+pub(crate) fn check_size(a: Range, b: Range, option: &str) -> Result<(), CliError> {
+    if a.n.saturating_mul(b.n) > MAX_POINTS {
+        return Err(CliError::invalid_text(
+            option,
+            a,
+            format!("the grid has more than {MAX_POINTS} points"),
+        ));
+    }
+    Ok(())
+}
 
 /// A point by the bits of its coordinates (a resumed row matches to the last bit).
 type Key = (u64, u64);
@@ -22,21 +106,22 @@ fn key((a, b): (f64, f64)) -> Key {
     (a.to_bits(), b.to_bits())
 }
 
-/// The file of a grid command: its CSV columns, what the file is called in errors (`map`
-/// file), and the names of the two coordinates in warnings (`Ω`, `V`).
-pub(crate) struct GridFile {
+/// The file of a grid command whose results are `T`: its CSV columns, what the file is called
+/// in errors (`map` file), the names of the two coordinates in warnings (`Ω`, `V`), and the
+/// point of a result.
+pub(crate) struct GridFile<T> {
     pub columns: &'static [&'static str],
     pub kind: &'static str,
     pub axes: [&'static str; 2],
+    pub point: fn(&T) -> (f64, f64),
 }
 
 /// One run of a grid command: the grid, the results in hand (read from `--out` or computed),
 /// and the lock on `--out` (released when the run is dropped).
 pub(crate) struct GridRun<'a, T> {
-    file: GridFile,
+    file: &'a GridFile<T>,
     out: Option<&'a Path>,
     _lock: Option<OutLock>,
-    point: fn(&T) -> (f64, f64),
     done: HashMap<Key, T>,
     /// The grid's points, `(a.value(k % a.n), b.value(k / a.n))` in interleaved order of `k`.
     pub grid: Vec<(f64, f64)>,
@@ -56,13 +141,12 @@ pub(crate) struct Computed {
 
 impl<'a, T> GridRun<'a, T> {
     /// Takes the lock on `out`, reads the results already in it with `parse` (given a row's
-    /// text and its line number; its `Err` is why the file is refused), keyed by `point`, and
-    /// lays out the grid of `a × b`.
+    /// text and its row number; its `Err` is why the file is refused), and lays out the grid of
+    /// `a × b`.
     pub(crate) fn open(
-        file: GridFile,
+        file: &'a GridFile<T>,
         out: Option<&'a Path>,
         (a, b): (Range, Range),
-        point: fn(&T) -> (f64, f64),
         mut parse: impl FnMut(&str, usize) -> Result<T, String>,
     ) -> Result<Self, CliError> {
         let lock = out.map(OutLock::take).transpose()?;
@@ -72,7 +156,7 @@ impl<'a, T> GridRun<'a, T> {
             read_resumable(path, &file.columns.join(","), file.kind, |text| {
                 line += 1;
                 let t = parse(text, line)?;
-                done.insert(key(point(&t)), t);
+                done.insert(key((file.point)(&t)), t);
                 Ok(())
             })?;
         }
@@ -89,12 +173,42 @@ impl<'a, T> GridRun<'a, T> {
             file,
             out,
             _lock: lock,
-            point,
             done,
             grid,
             todo,
             resumed,
         })
+    }
+
+    /// The summary counts after `c`, on `threads` of `width` lanes, in `wall` seconds.
+    pub(crate) fn summary(
+        &self,
+        c: &Computed,
+        (threads, width): (Threads, Width),
+        wall: f64,
+    ) -> GridSummary {
+        GridSummary {
+            points: self.grid.len(),
+            computed: c.computed,
+            resumed: self.resumed,
+            failed: c.failed.len(),
+            threads: threads.get(),
+            lanes: width.lanes(),
+            wall_time_s: wall,
+        }
+    }
+
+    /// `Ok` unless some of `c`'s points failed; then the error that counts them (`points`: the
+    /// command's word for them).
+    pub(crate) fn check(&self, c: &Computed, points: &str) -> Result<(), CliError> {
+        if c.failed.is_empty() {
+            return Ok(());
+        }
+        Err(CliError::Failed(format!(
+            "{} of {} {points} failed (listed above); the others are saved",
+            c.failed.len(),
+            self.todo.len()
+        )))
     }
 
     /// The result at `p`, if in hand.
@@ -123,7 +237,7 @@ impl<'a, T> GridRun<'a, T> {
         if let Some(c) = csv.as_mut() {
             c.flush()?;
         }
-        let (todo, done, point) = (&self.todo, &mut self.done, self.point);
+        let (todo, done, point) = (&self.todo, &mut self.done, self.file.point);
         let mut failed = Vec::new();
         let mut computed = 0usize;
         let mut progress = Progress::new(todo.len() as f64, message);

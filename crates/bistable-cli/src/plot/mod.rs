@@ -415,6 +415,52 @@ pub(crate) fn chart<'a, 'b>(
     Ok(chart)
 }
 
+/// A figure over a grid of cells `xs × ys` in `area`: a chart with the axes of [`grid_axis`]
+/// on the left and a side panel `panel` pixels wide on the right (for the legend). `draw` gets
+/// the chart, the panel and, for each axis, its range and the half-width of a cell.
+pub(crate) fn grid_figure(
+    area: &Area<'_>,
+    panel: u32,
+    (xs, ys): (Range, Range),
+    (x_desc, y_desc): (&str, &str),
+    draw: impl FnOnce(&mut Chart<'_, '_>, &Area<'_>, [((f64, f64), f64); 2]) -> DrawResult,
+) -> DrawResult {
+    let (w, _) = area.dim_in_pixel();
+    let (left, right) = area.split_horizontally(w - panel);
+    let (x, y) = (grid_axis(xs), grid_axis(ys));
+    let mut chart = chart(&left, x.0, y.0, x_desc, y_desc, None)?;
+    draw(&mut chart, &right, [x, y])
+}
+
+/// The cell of a grid figure centred on `(x, y)` with half-widths `(hx, hy)`, filled with `fill`.
+pub(crate) fn cell(
+    (x, y): (f64, f64),
+    (hx, hy): (f64, f64),
+    fill: RGBColor,
+) -> Rectangle<(f64, f64)> {
+    Rectangle::new([(x - hx, y - hy), (x + hx, y + hy)], fill.filled())
+}
+
+/// An entry of a side panel's legend at height `y`: a swatch of `fill`, `label` beside it and
+/// `note` below the label in a smaller font (`note_size` pixels, `note_colour`).
+pub(crate) fn swatch(
+    area: &Area<'_>,
+    y: i32,
+    fill: RGBColor,
+    label: String,
+    (note, note_size, note_colour): (String, u32, RGBColor),
+) -> DrawResult {
+    let text = |size| (FONT, size).into_font().color(&BLACK);
+    area.draw(&Rectangle::new([(14, y - 11), (36, y + 11)], fill.filled()))?;
+    area.draw(&Text::new(label, (46, y - 1), left(text(15))))?;
+    area.draw(&Text::new(
+        note,
+        (46, y + 17),
+        left(text(note_size).color(&note_colour)),
+    ))?;
+    Ok(())
+}
+
 /// Drops points closer than about a pixel to the previous kept one (keeps the last point).
 fn thin(chart: &Chart<'_, '_>, pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(pts.len().min(100_000));
