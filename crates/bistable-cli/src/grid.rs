@@ -270,3 +270,86 @@ impl<'a, T> GridRun<'a, T> {
         })
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::Field;
+
+    /// A result: the point and a value.
+    type Item = (f64, f64, f64);
+
+    const FILE: GridFile<Item> = GridFile {
+        columns: &["a", "b", "value"],
+        kind: "test",
+        axes: ["a", "b"],
+        point: |t| (t.0, t.1),
+    };
+
+    fn parse(text: &str, row: usize) -> Result<Item, String> {
+        let f: Vec<f64> = text.split(',').map(|c| c.parse().unwrap()).collect();
+        match f[..] {
+            [a, b, v] => Ok((a, b, v)),
+            _ => Err(format!("has a bad row {row}")),
+        }
+    }
+
+    /// Computes every point of `todo` as `a + 10 b` but fails the first `fail` of them.
+    fn compute(run: &mut GridRun<'_, Item>, fail: usize) -> Computed {
+        run.compute(
+            "test".to_string(),
+            |c, t| c.row(&[Field::F(t.0), Field::F(t.1), Field::F(t.2)]),
+            |todo, done| {
+                for (i, &(a, b)) in todo.iter().enumerate() {
+                    let r = if i < fail {
+                        Err(CliError::Failed("no".into()))
+                    } else {
+                        Ok((a, b, a + 10.0 * b))
+                    };
+                    done(i, r)?;
+                }
+                Ok(())
+            },
+        )
+        .unwrap()
+    }
+
+    #[test]
+    fn resumes_from_the_rows_in_the_file() {
+        let dir = std::env::temp_dir().join(format!("bistable-grid-{}", std::process::id()));
+        let out = dir.join("g.csv");
+        let _ = std::fs::remove_dir_all(&dir);
+        let ranges = ("1:3:3".parse().unwrap(), "0:1:2".parse().unwrap());
+        let mut run = GridRun::open(&FILE, Some(&out), ranges, parse).unwrap();
+        assert_eq!((run.grid.len(), run.todo.len(), run.resumed), (6, 6, 0));
+        let c = compute(&mut run, 2);
+        assert_eq!((c.computed, c.failed.len()), (4, 2));
+        assert_eq!(
+            run.summary(&c, (Threads::all(), Width::from_lanes(1).unwrap()), 0.0)
+                .failed,
+            2
+        );
+        assert!(run.check(&c, "points").is_err());
+        drop(run);
+        assert!(!dir.join("g.csv.lock").exists());
+        // An interrupted write leaves half a row: it is dropped, the failed points are redone.
+        let mut text = std::fs::read_to_string(&out).unwrap();
+        assert_eq!(text.lines().count(), 5);
+        text.push_str("9,9");
+        std::fs::write(&out, text).unwrap();
+        let mut run = GridRun::open(&FILE, Some(&out), ranges, parse).unwrap();
+        assert_eq!((run.todo.len(), run.resumed), (2, 4));
+        let c = compute(&mut run, 0);
+        assert_eq!((c.computed, c.failed.len()), (2, 0));
+        for &p in &run.grid {
+            assert_eq!(run.get(p).map(|t| t.2), Some(p.0 + 10.0 * p.1));
+        }
+        drop(run);
+        let text = std::fs::read_to_string(&out).unwrap();
+        assert_eq!(text.lines().count(), 7);
+        assert!(text.starts_with("a,b,value\n") && text.ends_with('\n'));
+        let run = GridRun::open(&FILE, Some(&out), ranges, parse).unwrap();
+        assert_eq!((run.todo.len(), run.resumed), (0, 6));
+        let _ = std::fs::remove_dir_all(&dir);
+    }
+}
