@@ -2,8 +2,7 @@
 //! plate phase for one shaker point `(Ω, V)`, computed in parallel, written row by row to a
 //! resumable CSV file, drawn as a PNG, with the attractors and the uncertainty exponent.
 
-use std::collections::HashMap;
-use std::path::{Path, PathBuf};
+use std::path::PathBuf;
 use std::time::Instant as WallClock;
 
 use clap::{ArgGroup, Args};
@@ -15,17 +14,16 @@ use bistable_analysis::basins::{
     uncertainty_samples, Attractor, Cell, Uncertain,
 };
 use bistable_analysis::sensitivity::Outcome;
-use bistable_analysis::sweep::interleaved;
 use bistable_analysis::Model;
 use bistable_core::{ClassifyOptions, ResponseClass, Well};
 
-use crate::common::{lanes, threads, CommonArgs};
+use crate::common::CommonArgs;
 use crate::error::CliError;
-use crate::map::OutLock;
-use crate::output::{print_json, print_text, CsvFile, Field};
+use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary};
+use crate::output::{print_json, print_text, Field};
 use crate::plot::{self, header, Area, DrawResult, FONT};
 use crate::progress::Progress;
-use crate::ranges::{Range, MAX_POINTS};
+use crate::ranges::Range;
 
 /// Long description shown by `bistable basins --help`.
 pub const LONG_ABOUT: &str = "\
@@ -75,6 +73,10 @@ Examples:
 /// Options of `bistable basins`.
 #[derive(Debug, Clone, Args)]
 #[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot"])))]
+#[command(mut_args(grid_help(
+    "Append one row per start to FILE.csv, skipping starts already in it",
+    "Draw the basins to FILE.png"
+)))]
 pub struct BasinsArgs {
     #[command(flatten)]
     pub common: CommonArgs,
@@ -118,22 +120,8 @@ pub struct BasinsArgs {
     #[arg(long, value_name = "N", default_value_t = 400)]
     pub uncertainty_samples: usize,
 
-    /// Append one row per start to FILE.csv, skipping starts already in it.
-    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
-    pub out: Option<PathBuf>,
-
-    /// Draw the basins to FILE.png.
-    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
-    pub plot: Option<PathBuf>,
-
-    /// Worker threads [default: all cores].
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-
-    /// Trajectories each thread advances together in SIMD lanes: 1 (one at a time), 4 (AVX2)
-    /// or 8 (AVX-512) [default: 4]. The results are the same for every width.
-    #[arg(long, value_name = "N")]
-    pub lanes: Option<usize>,
+    #[command(flatten)]
+    pub grid: GridArgs,
 }
 
 /// CSV header of `basins`.
@@ -154,6 +142,14 @@ pub const COLUMNS: [&str; 15] = [
     "at_rest_in_second_well",
     "periods_simulated",
 ];
+
+/// The CSV file of `basins`.
+const FILE: GridFile<Cell> = GridFile {
+    columns: &COLUMNS,
+    kind: "basins",
+    axes: ["x0", "x0'"],
+    point: |c| (c.x0, c.v0),
+};
 
 #[derive(Debug, Serialize)]
 struct AttractorJson {
@@ -187,26 +183,14 @@ struct Summary {
     x_range: String,
     v_range: String,
     plate_x: f64,
-    points: usize,
-    computed: usize,
-    resumed: usize,
-    failed: usize,
-    threads: usize,
-    /// Trajectories per thread in SIMD lanes.
-    lanes: usize,
-    wall_time_s: f64,
+    #[serde(flatten)]
+    grid: GridSummary,
     attractors: Vec<AttractorJson>,
     uncertainty: Vec<UncertainJson>,
     uncertainty_exponent: Option<f64>,
     boundary_dimension: Option<f64>,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
-}
-
-type Key = (u64, u64);
-
-fn key(x: f64, v: f64) -> Key {
-    (x.to_bits(), v.to_bits())
 }
 
 fn label(a: &Attractor) -> String {
@@ -246,80 +230,33 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
             ),
         ));
     }
-    if xs.n.saturating_mul(vs.n) > MAX_POINTS {
-        return Err(CliError::invalid_text(
-            "--x-range",
-            xs,
-            format!("the grid has more than {MAX_POINTS} points"),
-        ));
-    }
+    grid::check_size(xs, vs, "--x-range")?;
     let co = ClassifyOptions {
         max_natural_periods: args.max_periods,
         lyapunov_periods: args.lyapunov_periods,
         ..ClassifyOptions::default()
     }
     .check()?;
-    let threads = threads(args.threads, "--threads")?;
-    let width = lanes(args.lanes, "--lanes")?;
+    let (threads, width) = args.grid.parallel()?;
 
-    let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
-    let mut done: HashMap<Key, Cell> = HashMap::new();
-    if let Some(out) = &args.out {
-        for c in read_existing(out, &model, phase)? {
-            done.insert(key(c.x0, c.v0), c);
-        }
-    }
-    let grid: Vec<(f64, f64)> = interleaved(xs.n * vs.n)
-        .map(|k| (xs.value(k % xs.n), vs.value(k / xs.n)))
-        .collect();
-    let resumed = grid
-        .iter()
-        .filter(|&&(x, v)| done.contains_key(&key(x, v)))
-        .count();
-    let todo: Vec<(f64, f64)> = grid
-        .iter()
-        .copied()
-        .filter(|&(x, v)| !done.contains_key(&key(x, v)))
-        .collect();
+    let mut run = GridRun::open(&FILE, args.grid.out.as_deref(), (xs, vs), |text, row| {
+        parse_row(text, &model, phase).map_err(|e| format!("has a bad row {row}: {e}"))
+    })?;
 
     let start = WallClock::now();
-    let mut csv = match &args.out {
-        Some(p) if p.exists() => Some(CsvFile::append(p)?),
-        Some(p) => Some(CsvFile::create(p, &COLUMNS.join(","))?),
-        None => None,
-    };
-    let mut failed = Vec::new();
-    let mut computed = 0usize;
-    let mut progress = Progress::new(todo.len() as f64, format!("basins: {} starts", todo.len()));
-    classify_starts(&model, phase, co, &todo, threads, width, |i, r| {
-        match r {
-            Ok(cell) => {
-                if let Some(c) = csv.as_mut() {
-                    c.row(&row(&cell, &model, phase))?;
-                    c.flush()?;
-                }
-                done.insert(key(cell.x0, cell.v0), cell);
-                computed += 1;
-            }
-            Err(e) => failed.push((todo[i], CliError::from(e))),
-        }
-        progress.set((computed + failed.len()) as f64);
-        Ok::<(), CliError>(())
-    })?;
-    progress.finish();
-    if let Some(c) = csv {
-        c.finish()?;
-    }
-    for ((x, v), e) in &failed {
-        eprintln!("warning: x0 = {x}, x0' = {v}: {e}");
-    }
+    let done = run.compute(
+        format!("basins: {} starts", run.todo.len()),
+        |c, cell| c.row(&row(cell, &model, phase)),
+        |todo, done| {
+            classify_starts(&model, phase, co, todo, threads, width, |i, r| {
+                done(i, r.map_err(CliError::from))
+            })
+        },
+    )?;
 
     // Attractors over the grid's cells, in grid order.
     let cells: Vec<Cell> = (0..xs.n * vs.n)
-        .filter_map(|k| {
-            done.get(&key(xs.value(k % xs.n), vs.value(k / xs.n)))
-                .copied()
-        })
+        .filter_map(|k| run.get((xs.value(k % xs.n), vs.value(k / xs.n))).copied())
         .collect();
     let (attractors, index) = identify(&cells);
 
@@ -361,13 +298,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
         x_range: xs.to_string(),
         v_range: vs.to_string(),
         plate_x,
-        points: grid.len(),
-        computed,
-        resumed,
-        failed: failed.len(),
-        threads: threads.get(),
-        lanes: width.lanes(),
-        wall_time_s: wall,
+        grid: run.summary(&done, (threads, width), wall),
         attractors: attractors
             .iter()
             .enumerate()
@@ -395,10 +326,10 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
             .collect(),
         uncertainty_exponent: alpha,
         boundary_dimension: alpha.map(|a| 2.0 - a),
-        out: args.out.clone(),
-        plot: args.plot.clone(),
+        out: args.grid.out.clone(),
+        plot: args.grid.plot.clone(),
     };
-    if let Some(path) = &args.plot {
+    if let Some(path) = &args.grid.plot {
         plot::png(path, (1500, 1000), |root| {
             draw(root, &summary, xs, vs, &cells, &index, &attractors)
         })?;
@@ -408,14 +339,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     } else {
         print_text(&human(&summary))?;
     }
-    if !failed.is_empty() {
-        return Err(CliError::Failed(format!(
-            "{} of {} starts failed (listed above); the others are saved",
-            failed.len(),
-            todo.len()
-        )));
-    }
-    Ok(())
+    run.check(&done, "starts")
 }
 
 fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
@@ -438,19 +362,6 @@ fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
         Field::flag(c.at_rest),
         Field::F(c.periods_simulated),
     ]
-}
-
-/// The cells already in `path` (none if it does not exist); drops an incomplete last line;
-/// refuses a file with another header or another Ω, V, phase, ζ or e.
-fn read_existing(path: &Path, model: &Model, phase: f64) -> Result<Vec<Cell>, CliError> {
-    let mut cells = Vec::new();
-    crate::output::read_resumable(path, &COLUMNS.join(","), "basins", |text| {
-        let c = parse_row(text, model, phase)
-            .map_err(|e| format!("has a bad row {}: {e}", cells.len() + 2))?;
-        cells.push(c);
-        Ok(())
-    })?;
-    Ok(cells)
 }
 
 fn parse_row(text: &str, model: &Model, phase: f64) -> Result<Cell, String> {
@@ -518,8 +429,8 @@ fn parse_row(text: &str, model: &Model, phase: f64) -> Result<Cell, String> {
 
 fn human(s: &Summary) -> String {
     let mut t = format!(
-        "basins at Ω = {}, V = {}, phase {} (ζ = {}, e = {}): x0 {} × x0' {}, {} starts, {} \
-         computed, {} resumed, {} failed; {:.1} s on {} threads\n",
+        "basins at Ω = {}, V = {}, phase {} (ζ = {}, e = {}): x0 {} × x0' {}, {}; {:.1} s \
+         on {} threads\n",
         s.omega,
         s.velocity,
         s.phase,
@@ -527,12 +438,9 @@ fn human(s: &Summary) -> String {
         s.restitution,
         s.x_range,
         s.v_range,
-        s.points,
-        s.computed,
-        s.resumed,
-        s.failed,
-        s.wall_time_s,
-        s.threads
+        s.grid.counts("starts", "resumed"),
+        s.grid.wall_time_s,
+        s.grid.threads
     );
     for a in s.attractors.iter().take(20) {
         t.push_str(&format!(
@@ -608,73 +516,66 @@ fn draw(
         ),
         &[],
     )?;
-    let (w, _) = area.dim_in_pixel();
-    let (left, right) = area.split_horizontally(w - 420);
-    let ((xr, hx), (vr, hv)) = (plot::grid_axis(xs), plot::grid_axis(vs));
-    let mut chart = plot::chart(
-        &left,
-        xr,
-        vr,
-        "start position x0 (units of Δx)",
-        "start velocity x0' (units of ω0·Δx)",
-        None,
-    )?;
-    chart.draw_series(cells.iter().zip(index).map(|(c, &i)| {
-        Rectangle::new(
-            [(c.x0 - hx, c.v0 - hv), (c.x0 + hx, c.v0 + hv)],
-            colour(i).filled(),
-        )
-    }))?;
-    // Legend: attractors with their basin fractions.
-    let text = |size| (FONT, size).into_font().color(&BLACK);
-    let mut y = 40;
-    right.draw(&Text::new(
-        "Attractors (basin share)",
-        (12, y),
-        plot::left(text(20)),
-    ))?;
-    y += 36;
-    for (i, a) in s.attractors.iter().enumerate().take(24) {
-        right.draw(&Rectangle::new(
-            [(14, y - 11), (36, y + 11)],
-            colour(i).filled(),
-        ))?;
-        right.draw(&Text::new(
-            format!("#{} {:.1}%", a.number, 100.0 * a.fraction),
-            (46, y - 1),
-            plot::left(text(15)),
-        ))?;
-        right.draw(&Text::new(
-            a.label.clone(),
-            (46, y + 17),
-            plot::left(text(12).color(&RGBColor(70, 70, 70))),
-        ))?;
-        y += 46;
-    }
-    if attractors.len() > 24 {
-        right.draw(&Text::new(
-            format!("… {} more", attractors.len() - 24),
-            (14, y),
-            plot::left(text(14)),
-        ))?;
-        y += 30;
-    }
-    if !s.uncertainty.is_empty() {
-        y += 10;
-        right.draw(&Text::new(
-            "ε-uncertain fraction f(ε)",
-            (12, y),
-            plot::left(text(16)),
-        ))?;
-        y += 24;
-        for u in &s.uncertainty {
+    plot::grid_figure(
+        &area,
+        420,
+        (xs, vs),
+        (
+            "start position x0 (units of Δx)",
+            "start velocity x0' (units of ω0·Δx)",
+        ),
+        |chart, right, [(_, hx), (_, hv)]| {
+            chart.draw_series(
+                cells
+                    .iter()
+                    .zip(index)
+                    .map(|(c, &i)| plot::cell((c.x0, c.v0), (hx, hv), colour(i))),
+            )?;
+            // Legend: attractors with their basin fractions.
+            let text = |size| (FONT, size).into_font().color(&BLACK);
+            let mut y = 40;
             right.draw(&Text::new(
-                format!("ε = {:.2e}: {:.3}", u.epsilon, u.fraction),
-                (14, y),
-                plot::left(text(13)),
+                "Attractors (basin share)",
+                (12, y),
+                plot::left(text(20)),
             ))?;
-            y += 20;
-        }
-    }
-    Ok(())
+            y += 36;
+            for (i, a) in s.attractors.iter().enumerate().take(24) {
+                plot::swatch(
+                    right,
+                    y,
+                    colour(i),
+                    format!("#{} {:.1}%", a.number, 100.0 * a.fraction),
+                    (a.label.clone(), 12, RGBColor(70, 70, 70)),
+                )?;
+                y += 46;
+            }
+            if attractors.len() > 24 {
+                right.draw(&Text::new(
+                    format!("… {} more", attractors.len() - 24),
+                    (14, y),
+                    plot::left(text(14)),
+                ))?;
+                y += 30;
+            }
+            if !s.uncertainty.is_empty() {
+                y += 10;
+                right.draw(&Text::new(
+                    "ε-uncertain fraction f(ε)",
+                    (12, y),
+                    plot::left(text(16)),
+                ))?;
+                y += 24;
+                for u in &s.uncertainty {
+                    right.draw(&Text::new(
+                        format!("ε = {:.2e}: {:.3}", u.epsilon, u.fraction),
+                        (14, y),
+                        plot::left(text(13)),
+                    ))?;
+                    y += 20;
+                }
+            }
+            Ok(())
+        },
+    )
 }

@@ -9,13 +9,17 @@
 //! - `common.rs`: the options every subcommand shares ([`common::CommonArgs`], flattened into each
 //!   subcommand's arguments), the validated model and the thread count built from them;
 //! - `error.rs`: [`error::CliError`] and its exit codes;
-//! - `output.rs`: number formatting, CSV writers, JSON printing;
+//! - `output.rs`: number formatting, CSV writers (and the resumable ones' lock), JSON printing;
+//! - `grid.rs`: the resumable grid driver of `map` and `basins` (skip the points in `--out`,
+//!   compute the others with a progress bar, append their rows as they complete);
 //! - `progress.rs`: progress bars on stderr for long runs;
-//! - `plot.rs`: PNG figures;
+//! - `plot/`: PNG figures: `plot/mod.rs` the helpers every figure uses, `plot/simulate.rs`
+//!   `simulate`'s figures (the other commands draw theirs in their own modules);
 //! - `ranges.rs`: `A:B:N` parameter ranges;
 //! - `simulate.rs`: `bistable simulate`;
 //! - `classify.rs`: `bistable classify` (and the classification record `map` writes);
 //! - `map.rs`: `bistable map`;
+//! - `basins.rs`: `bistable basins`;
 //! - `branches.rs`: periodic-orbit branches as CSV rows and curves on a chart;
 //! - `bifurcation.rs`: `bistable bifurcation`;
 //! - `orbit.rs`: `bistable orbit`;
@@ -34,6 +38,7 @@ mod classify;
 mod common;
 mod energy_map;
 mod error;
+mod grid;
 mod map;
 mod orbit;
 mod output;

@@ -1,7 +1,7 @@
 //! `bistable map`: the response-class map of the paper's Fig. 9 over an `Ω × V` grid, computed
 //! in parallel, written row by row to a resumable CSV file and drawn as a PNG.
 
-use std::collections::{HashMap, HashSet};
+use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant as WallClock;
 
@@ -9,22 +9,29 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::sensitivity::SensitivityOptions;
-use bistable_analysis::sweep::{classify_points_with, interleaved};
+use bistable_analysis::sweep::classify_points_with;
 use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
-use bistable_analysis::{Model, Threads};
-use bistable_core::{ClassifyOptions, Width};
+use bistable_analysis::Model;
+use bistable_core::ClassifyOptions;
 
 use crate::classify::{ClassifyArgs, Record, RecordCsv, CSV_COLUMNS};
-use crate::common::{lanes, threads, ModelArgs};
+use crate::common::ModelArgs;
 use crate::error::CliError;
-use crate::output::{print_json, print_text, CsvFile};
+use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary};
+use crate::output::{print_json, print_text};
 use crate::plot::{self, halo_segments, header, Area, DrawResult, Mark, FONT};
-use crate::progress::Progress;
-use crate::ranges::{Range, MAX_POINTS};
+use crate::ranges::Range;
 
 /// Lyapunov periods of an aperiodic point in a map unless `--lyapunov-periods` says otherwise.
 const MAP_LYAPUNOV_PERIODS: u32 = 300;
+
+/// The CSV file of `map`.
+const FILE: GridFile<Record> = GridFile {
+    columns: &CSV_COLUMNS,
+    kind: "map",
+    axes: ["Ω", "V"],
+    point: |r| (r.omega, r.velocity),
+};
 
 /// Long description shown by `bistable map --help`.
 pub const LONG_ABOUT: &str = "\
@@ -85,6 +92,10 @@ Examples:
 /// Options of `bistable map`.
 #[derive(Debug, Clone, Args)]
 #[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot"])))]
+#[command(mut_args(grid_help(
+    "Append one row per point to FILE.csv, skipping points already in it (see below)",
+    "Draw the map to FILE.png"
+)))]
 pub struct MapArgs {
     /// Ω values A:B:N (N evenly spaced values from A to B, ends included; Ω > 0).
     #[arg(
@@ -104,22 +115,8 @@ pub struct MapArgs {
     )]
     pub velocity_range: Range,
 
-    /// Append one row per point to FILE.csv, skipping points already in it (see below).
-    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
-    pub out: Option<PathBuf>,
-
-    /// Draw the map to FILE.png.
-    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
-    pub plot: Option<PathBuf>,
-
-    /// Worker threads [default: all cores].
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-
-    /// Trajectories each thread advances together in SIMD lanes: 1 (one at a time), 4 (AVX2)
-    /// or 8 (AVX-512) [default: 4]. The results are the same for every width.
-    #[arg(long, value_name = "N")]
-    pub lanes: Option<usize>,
+    #[command(flatten)]
+    pub grid: GridArgs,
 
     #[command(flatten)]
     pub classify: ClassifyArgs,
@@ -135,14 +132,8 @@ struct Summary {
     velocity_range: String,
     restitution: f64,
     zeta: f64,
-    points: usize,
-    computed: usize,
-    resumed: usize,
-    failed: usize,
-    threads: usize,
-    /// Trajectories per thread in SIMD lanes.
-    lanes: usize,
-    wall_time_s: f64,
+    #[serde(flatten)]
+    grid: GridSummary,
     points_per_second: f64,
     /// Sum of the points' own wall times (≈ CPU time).
     point_time_s: f64,
@@ -159,12 +150,6 @@ struct Summary {
     plot: Option<PathBuf>,
 }
 
-type Key = (u64, u64);
-
-fn key(omega: f64, velocity: f64) -> Key {
-    (omega.to_bits(), velocity.to_bits())
-}
-
 /// Runs `bistable map`.
 pub fn run(args: &MapArgs) -> Result<(), CliError> {
     let omegas = args
@@ -173,57 +158,48 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
     let vs = args
         .velocity_range
         .check("--velocity-range", |v| v >= 0.0, "V must be >= 0")?;
-    if omegas.n.saturating_mul(vs.n) > MAX_POINTS {
-        return Err(CliError::invalid_text(
-            "--omega-range",
-            omegas,
-            format!("the grid has more than {MAX_POINTS} points"),
-        ));
-    }
+    grid::check_size(omegas, vs, "--omega-range")?;
     let model = args.model.model(omegas.start, vs.start)?;
     let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;
     let so = args.classify.sensitivity()?;
-    let threads = threads(args.threads, "--threads")?;
-    let width = lanes(args.lanes, "--lanes")?;
+    let (threads, width) = args.grid.parallel()?;
 
-    let _lock = args.out.as_deref().map(OutLock::take).transpose()?;
-    let mut done: HashMap<Key, Record> = HashMap::new();
-    if let Some(out) = &args.out {
-        for r in read_existing(out, &model)? {
-            done.insert(key(r.omega, r.velocity), r);
-        }
-    }
-    let grid: Vec<(f64, f64)> = interleaved(omegas.n * vs.n)
-        .map(|k| (omegas.value(k % omegas.n), vs.value(k / omegas.n)))
-        .collect();
-    let in_grid: HashSet<Key> = grid.iter().map(|&(w, v)| key(w, v)).collect();
-    let resumed = done.keys().filter(|k| in_grid.contains(k)).count();
-    let todo: Vec<(f64, f64)> = grid
-        .iter()
-        .copied()
-        .filter(|&(w, v)| !done.contains_key(&key(w, v)))
-        .collect();
+    let mut run = GridRun::open(
+        &FILE,
+        args.grid.out.as_deref(),
+        (omegas, vs),
+        |text, row| {
+            let cells: Vec<&str> = text.split(',').collect();
+            let r = Record::from_csv(&cells).map_err(|e| format!("has a bad row {row}: {e}"))?;
+            if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
+                return Err(format!(
+                    "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
+                     another file",
+                    r.zeta,
+                    r.restitution,
+                    model.params.zeta(),
+                    model.restitution()
+                ));
+            }
+            Ok(r)
+        },
+    )?;
 
     let start = WallClock::now();
-    let (computed, failed) = compute(
-        &todo,
-        &model,
-        co,
-        so,
-        (threads, width),
-        args.out.as_deref(),
-        |r| {
-            done.insert(key(r.omega, r.velocity), r);
+    let done = run.compute(
+        format!("classifying {} points", run.todo.len()),
+        |c, r| c.row(&r.fields()),
+        |todo, done| {
+            classify_points_with(&model, todo, co, so, threads, width, |i, r| {
+                done(i, r.map(|p| Record::new(&p)).map_err(CliError::from))
+            })
         },
     )?;
     let wall = start.elapsed().as_secs_f64();
 
-    let records: Vec<&Record> = grid
-        .iter()
-        .filter_map(|&(w, v)| done.get(&key(w, v)))
-        .collect();
-    if let Some(path) = &args.plot {
-        draw(path, &model, omegas, vs, &records, &failed, co)?;
+    let records: Vec<&Record> = run.grid.iter().filter_map(|&p| run.get(p)).collect();
+    if let Some(path) = &args.grid.plot {
+        draw(path, &model, omegas, vs, &records, &done.failed, co)?;
     }
     let mut counts: HashMap<String, usize> = HashMap::new();
     for r in &records {
@@ -234,15 +210,9 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         velocity_range: vs.to_string(),
         restitution: model.restitution(),
         zeta: model.params.zeta(),
-        points: grid.len(),
-        computed,
-        resumed,
-        failed: failed.len(),
-        threads: threads.get(),
-        lanes: width.lanes(),
-        wall_time_s: wall,
+        grid: run.summary(&done, (threads, width), wall),
         points_per_second: if wall > 0.0 {
-            computed as f64 / wall
+            done.computed as f64 / wall
         } else {
             0.0
         },
@@ -260,141 +230,22 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
         },
         repeated: records.iter().filter(|r| r.runs > 1).count(),
         counts,
-        out: args.out.clone(),
-        plot: args.plot.clone(),
+        out: args.grid.out.clone(),
+        plot: args.grid.plot.clone(),
     };
     if args.model.json {
         print_json(&summary)?;
     } else {
         print_text(&human(&summary))?;
     }
-    if !failed.is_empty() {
-        return Err(CliError::Failed(format!(
-            "{} of {} points failed (listed above); the others are saved",
-            failed.len(),
-            todo.len()
-        )));
-    }
-    Ok(())
-}
-
-/// `FILE.csv.lock` holding this process's id while it appends to `FILE.csv`, so that two runs
-/// cannot interleave their rows. A lock left by a process that no longer runs (killed) is
-/// taken over.
-pub(crate) struct OutLock(PathBuf);
-
-impl OutLock {
-    pub(crate) fn take(out: &Path) -> Result<Self, CliError> {
-        let path = PathBuf::from(format!("{}.lock", out.display()));
-        if let Ok(text) = std::fs::read_to_string(&path) {
-            let pid = text.trim();
-            let alive = !pid.is_empty()
-                && pid != std::process::id().to_string()
-                && Path::new("/proc").join(pid).exists();
-            if alive {
-                return Err(CliError::invalid_text(
-                    "--out",
-                    out.display(),
-                    format!(
-                        "is being written by another run (process {pid}, see {}); wait for it or                          stop it",
-                        path.display()
-                    ),
-                ));
-            }
-        }
-        crate::output::create_parent(&path)?;
-        std::fs::write(&path, std::process::id().to_string())
-            .map_err(|e| CliError::io("cannot write", &path, e))?;
-        Ok(Self(path))
-    }
-}
-
-impl Drop for OutLock {
-    fn drop(&mut self) {
-        let _ = std::fs::remove_file(&self.0);
-    }
-}
-
-/// The rows already in `path` (none if it does not exist). Drops an incomplete last line (an
-/// interrupted write) from the file; refuses a file with another header or other `ζ`, `e`.
-fn read_existing(path: &Path, model: &Model) -> Result<Vec<Record>, CliError> {
-    let mut records = Vec::new();
-    crate::output::read_resumable(path, &CSV_COLUMNS.join(","), "map", |text| {
-        let cells: Vec<&str> = text.split(',').collect();
-        let r = Record::from_csv(&cells)
-            .map_err(|e| format!("has a bad row {}: {e}", records.len() + 2))?;
-        if r.restitution != model.restitution() || r.zeta != model.params.zeta() {
-            return Err(format!(
-                "holds points with ζ = {}, e = {}, but this run has ζ = {}, e = {}; use \
-                 another file",
-                r.zeta,
-                r.restitution,
-                model.params.zeta(),
-                model.restitution()
-            ));
-        }
-        records.push(r);
-        Ok(())
-    })?;
-    Ok(records)
-}
-
-/// Classifies `todo` on `threads` workers of `width` lanes with a progress bar; each finished
-/// record goes to
-/// `out` (flushed at once) and to `sink`. Returns the number computed and the points that
-/// failed (reported on stderr).
-fn compute(
-    todo: &[(f64, f64)],
-    model: &Model,
-    co: ClassifyOptions,
-    so: SensitivityOptions,
-    (threads, width): (Threads, Width),
-    out: Option<&Path>,
-    mut sink: impl FnMut(Record),
-) -> Result<(usize, Vec<(f64, f64)>), CliError> {
-    let mut csv = match out {
-        Some(p) if p.exists() => Some(CsvFile::append(p)?),
-        Some(p) => Some(CsvFile::create(p, &CSV_COLUMNS.join(","))?),
-        None => None,
-    };
-    if let Some(c) = csv.as_mut() {
-        c.flush()?;
-    }
-    let mut failed = Vec::new();
-    let mut computed = 0usize;
-    let mut progress = Progress::new(
-        todo.len() as f64,
-        format!("classifying {} points", todo.len()),
-    );
-    classify_points_with(model, todo, co, so, threads, width, |i, r| {
-        match r {
-            Ok(point) => {
-                let rec = Record::new(&point);
-                if let Some(c) = csv.as_mut() {
-                    c.row(&rec.fields())?;
-                    c.flush()?;
-                }
-                computed += 1;
-                sink(rec);
-            }
-            Err(e) => failed.push((todo[i], CliError::from(e))),
-        }
-        progress.set((computed + failed.len()) as f64);
-        Ok::<(), CliError>(())
-    })?;
-    progress.finish();
-    for ((w, v), e) in &failed {
-        eprintln!("warning: Ω = {w}, V = {v}: {e}");
-    }
-    Ok((computed, failed.into_iter().map(|f| f.0).collect()))
+    run.check(&done, "points")
 }
 
 fn human(s: &Summary) -> String {
     let mut counts: Vec<_> = s.counts.iter().collect();
     counts.sort_by(|a, b| b.1.cmp(a.1).then(a.0.cmp(b.0)));
     let mut text = format!(
-        "map Ω {} × V {} (ζ = {}, e = {}): {} points, {} computed, {} resumed from the file, \
-         {} failed\n\
+        "map Ω {} × V {} (ζ = {}, e = {}): {}\n\
          wall time {:.1} s on {} threads: {:.1} points/s; {:.1}% of the points ran the full \
          length\n\
          sensitive (the outcome depends on rounding): {} points ({:.2}%); {} points repeated\n",
@@ -402,12 +253,9 @@ fn human(s: &Summary) -> String {
         s.velocity_range,
         s.zeta,
         s.restitution,
-        s.points,
-        s.computed,
-        s.resumed,
-        s.failed,
-        s.wall_time_s,
-        s.threads,
+        s.grid.counts("points", "resumed from the file"),
+        s.grid.wall_time_s,
+        s.grid.threads,
         s.points_per_second,
         100.0 * s.full_length_share,
         s.sensitive,
@@ -566,84 +414,81 @@ fn draw_map(
         ),
         &legend,
     )?;
-    let (w, _) = area.dim_in_pixel();
-    let (left, right) = area.split_horizontally(w - 330);
-    let ((wx, hw), (vy, hv)) = (plot::grid_axis(omegas), plot::grid_axis(vs));
-    let mut chart = plot::chart(
-        &left,
-        wx,
-        vy,
-        "shaker frequency ratio Ω (units of ω0)",
-        "shaker velocity amplitude V (units of ω0·Δx)",
-        None,
-    )?;
-    let mut present: HashMap<Category, usize> = HashMap::new();
-    let cells = records
-        .iter()
-        .map(|r| (r.omega, r.velocity, category(r)))
-        .chain(failed.iter().map(|&(w, v)| (w, v, Category::Failed)));
-    let mut rects = Vec::with_capacity(total);
-    for (om, v, c) in cells {
-        *present.entry(c).or_default() += 1;
-        rects.push(Rectangle::new(
-            [(om - hw, v - hv), (om + hw, v + hv)],
-            c.colour().filled(),
-        ));
-    }
-    chart.draw_series(rects)?;
-    // Sensitive points: a hatch stroke across the cell.
-    let sensitive: Vec<(f64, f64)> = records
-        .iter()
-        .filter(|r| r.sensitive)
-        .map(|r| (r.omega, r.velocity))
-        .collect();
-    chart.draw_series(sensitive.iter().map(|&(om, v)| {
-        PathElement::new(
-            vec![(om - hw, v - hv), (om + hw, v + hv)],
-            SENSITIVE.stroke_width(2),
-        )
-    }))?;
-    // Thresholds, clipped to the chart.
-    let to_px = |p: (f64, f64)| chart.backend_coord(&p);
-    let (x0, x1) = wx;
-    let (y0, y1) = vy;
-    let mut labels = Vec::new();
-    for (v, colour, dash, name) in [
-        (v_single, LINE_SINGLE, None, "single impact"),
-        (v_inter, LINE_INTERWELL, Some((10, 6)), "interwell"),
-    ] {
-        if v > y0 && v < y1 {
-            halo_segments(root, &[to_px((x0, v)), to_px((x1, v))], colour, dash)?;
-            labels.push((to_px((x1, v)), name));
-        }
-    }
-    // V = Ω/2 from where it enters the chart to where it leaves.
-    let a = x0.max(2.0 * y0);
-    let b = x1.min(2.0 * y1);
-    if b > a {
-        halo_segments(
-            root,
-            &[to_px((a, quasi_static(a))), to_px((b, quasi_static(b)))],
-            LINE_QUASI,
-            Some((3, 4)),
-        )?;
-    }
-    for ((px, py), name) in labels {
-        let style = plot::left((FONT, 16).into_font().color(&BLACK));
-        let text = format!("{name} ");
-        let (tw, _) = root.estimate_text_size(&text, &style)?;
-        let x = px - tw as i32 - 8;
-        root.draw(&Rectangle::new(
-            [(x - 4, py - 22), (x + tw as i32 + 2, py - 4)],
-            WHITE.mix(0.85).filled(),
-        ))?;
-        root.draw(&Text::new(text, (x, py - 13), style))?;
-    }
-    legend_panel(
-        &right,
-        &present,
-        records.len() + failed.len(),
-        sensitive.len(),
+    plot::grid_figure(
+        &area,
+        330,
+        (omegas, vs),
+        (
+            "shaker frequency ratio Ω (units of ω0)",
+            "shaker velocity amplitude V (units of ω0·Δx)",
+        ),
+        |chart, right, [(wx, hw), (vy, hv)]| {
+            let mut present: HashMap<Category, usize> = HashMap::new();
+            let cells = records
+                .iter()
+                .map(|r| (r.omega, r.velocity, category(r)))
+                .chain(failed.iter().map(|&(w, v)| (w, v, Category::Failed)));
+            let mut rects = Vec::with_capacity(total);
+            for (om, v, c) in cells {
+                *present.entry(c).or_default() += 1;
+                rects.push(plot::cell((om, v), (hw, hv), c.colour()));
+            }
+            chart.draw_series(rects)?;
+            // Sensitive points: a hatch stroke across the cell.
+            let sensitive: Vec<(f64, f64)> = records
+                .iter()
+                .filter(|r| r.sensitive)
+                .map(|r| (r.omega, r.velocity))
+                .collect();
+            chart.draw_series(sensitive.iter().map(|&(om, v)| {
+                PathElement::new(
+                    vec![(om - hw, v - hv), (om + hw, v + hv)],
+                    SENSITIVE.stroke_width(2),
+                )
+            }))?;
+            // Thresholds, clipped to the chart.
+            let to_px = |p: (f64, f64)| chart.backend_coord(&p);
+            let (x0, x1) = wx;
+            let (y0, y1) = vy;
+            let mut labels = Vec::new();
+            for (v, colour, dash, name) in [
+                (v_single, LINE_SINGLE, None, "single impact"),
+                (v_inter, LINE_INTERWELL, Some((10, 6)), "interwell"),
+            ] {
+                if v > y0 && v < y1 {
+                    halo_segments(root, &[to_px((x0, v)), to_px((x1, v))], colour, dash)?;
+                    labels.push((to_px((x1, v)), name));
+                }
+            }
+            // V = Ω/2 from where it enters the chart to where it leaves.
+            let a = x0.max(2.0 * y0);
+            let b = x1.min(2.0 * y1);
+            if b > a {
+                halo_segments(
+                    root,
+                    &[to_px((a, quasi_static(a))), to_px((b, quasi_static(b)))],
+                    LINE_QUASI,
+                    Some((3, 4)),
+                )?;
+            }
+            for ((px, py), name) in labels {
+                let style = plot::left((FONT, 16).into_font().color(&BLACK));
+                let text = format!("{name} ");
+                let (tw, _) = root.estimate_text_size(&text, &style)?;
+                let x = px - tw as i32 - 8;
+                root.draw(&Rectangle::new(
+                    [(x - 4, py - 22), (x + tw as i32 + 2, py - 4)],
+                    WHITE.mix(0.85).filled(),
+                ))?;
+                root.draw(&Text::new(text, (x, py - 13), style))?;
+            }
+            legend_panel(
+                right,
+                &present,
+                records.len() + failed.len(),
+                sensitive.len(),
+            )
+        },
     )
 }
 
@@ -715,24 +560,16 @@ fn legend_panel(
         others.push(Category::Failed);
     }
     for c in others {
-        area.draw(&Rectangle::new(
-            [(14, y - 11), (36, y + 11)],
-            c.colour().filled(),
-        ))?;
         let count = present.get(&c).copied().unwrap_or(0);
         let label = match c {
             Category::AtRestInWellTwo => "converged to the second equilibrium".to_string(),
             _ => c.label(),
         };
-        area.draw(&Text::new(label, (46, y - 1), plot::left(text(15))))?;
-        area.draw(&Text::new(
-            format!(
-                "{count} points ({:.1}%)",
-                100.0 * count as f64 / n.max(1) as f64
-            ),
-            (46, y + 17),
-            plot::left(text(13).color(&RGBColor(90, 90, 90))),
-        ))?;
+        let note = format!(
+            "{count} points ({:.1}%)",
+            100.0 * count as f64 / n.max(1) as f64
+        );
+        plot::swatch(area, y, c.colour(), label, (note, 13, RGBColor(90, 90, 90)))?;
         y += 50;
     }
     // Sensitive points: the same hatch on a neutral cell.

@@ -191,6 +191,43 @@ pub fn read_resumable(
     Ok(())
 }
 
+/// `FILE.csv.lock` holding this process's id while it appends to `FILE.csv`, so that two runs
+/// cannot interleave their rows. A lock left by a process that no longer runs (killed) is
+/// taken over.
+pub(crate) struct OutLock(PathBuf);
+
+impl OutLock {
+    pub(crate) fn take(out: &Path) -> Result<Self, CliError> {
+        let path = PathBuf::from(format!("{}.lock", out.display()));
+        if let Ok(text) = std::fs::read_to_string(&path) {
+            let pid = text.trim();
+            let alive = !pid.is_empty()
+                && pid != std::process::id().to_string()
+                && Path::new("/proc").join(pid).exists();
+            if alive {
+                return Err(CliError::invalid_text(
+                    "--out",
+                    out.display(),
+                    format!(
+                        "is being written by another run (process {pid}, see {}); wait for it or                          stop it",
+                        path.display()
+                    ),
+                ));
+            }
+        }
+        create_parent(&path)?;
+        std::fs::write(&path, std::process::id().to_string())
+            .map_err(|e| CliError::io("cannot write", &path, e))?;
+        Ok(Self(path))
+    }
+}
+
+impl Drop for OutLock {
+    fn drop(&mut self) {
+        let _ = std::fs::remove_file(&self.0);
+    }
+}
+
 /// Creates the parent directory of `path` if it is missing.
 pub fn create_parent(path: &Path) -> Result<(), CliError> {
     match path.parent() {
