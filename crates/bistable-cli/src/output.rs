@@ -209,7 +209,7 @@ impl OutLock {
                     "--out",
                     out.display(),
                     format!(
-                        "is being written by another run (process {pid}, see {}); wait for it or                          stop it",
+                        "is being written by another run (process {pid}, see {}); wait for it or stop it",
                         path.display()
                     ),
                 ));
