@@ -30,6 +30,7 @@ pub mod branches;
 pub mod continuation;
 pub mod cycles;
 pub mod energy;
+pub mod event_log;
 pub mod ensemble;
 pub mod grid;
 pub mod model;
