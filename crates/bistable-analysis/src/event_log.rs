@@ -35,9 +35,8 @@
 use bistable_core::{ContactMode, Event, Impact, StickCause};
 
 /// Column names of the impacts table, in order.
-pub const IMPACT_COLUMNS: [&str; 7] = [
-    "index", "t", "phase", "x", "v_before", "v_after", "delta_k",
-];
+pub const IMPACT_COLUMNS: [&str; 7] =
+    ["index", "t", "phase", "x", "v_before", "v_after", "delta_k"];
 /// Column names of the sticking-intervals table, in order.
 pub const STICKING_COLUMNS: [&str; 4] = ["start", "end", "x_start", "x_end"];
 /// Column names of the snap-throughs table, in order.
@@ -401,7 +400,12 @@ mod tests {
         );
         assert_eq!(
             s[1].cells(),
-            [Cell::Real(2.0), Cell::Real(3.0), Cell::Real(0.2), Cell::Real(0.3)]
+            [
+                Cell::Real(2.0),
+                Cell::Real(3.0),
+                Cell::Real(0.2),
+                Cell::Real(0.3)
+            ]
         );
         assert_eq!(s[1].closing, Closing::Release);
         assert_eq!(log.sticks(), 2);
@@ -421,7 +425,12 @@ mod tests {
         assert_eq!(s[0].closing, Closing::EndOfRun);
         assert_eq!(
             s[0].cells(),
-            [Cell::Real(1.5), Cell::Missing, Cell::Real(0.4), Cell::Missing]
+            [
+                Cell::Real(1.5),
+                Cell::Missing,
+                Cell::Real(0.4),
+                Cell::Missing
+            ]
         );
         assert_eq!(log.open_stick(), None);
     }
@@ -431,7 +440,12 @@ mod tests {
         let rows = run(&mut EventLog::new(), &[end(2.0, 0.3)]);
         assert_eq!(
             sticks(&rows)[0].cells(),
-            [Cell::Missing, Cell::Real(2.0), Cell::Missing, Cell::Real(0.3)]
+            [
+                Cell::Missing,
+                Cell::Real(2.0),
+                Cell::Missing,
+                Cell::Real(0.3)
+            ]
         );
     }
 

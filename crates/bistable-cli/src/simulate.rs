@@ -442,7 +442,10 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
             &sibling(path, "_sticking.csv"),
             &STICKING_COLUMNS.join(","),
         )?);
-        rec.snaps_csv = Some(CsvFile::create(&sibling(path, "_snaps.csv"), &SNAP_COLUMNS.join(","))?);
+        rec.snaps_csv = Some(CsvFile::create(
+            &sibling(path, "_snaps.csv"),
+            &SNAP_COLUMNS.join(","),
+        )?);
     }
     let mut trace = match &args.trace {
         Some(path) => {
