@@ -31,6 +31,7 @@ pub mod continuation;
 pub mod cycles;
 pub mod energy;
 pub mod ensemble;
+pub mod event_log;
 pub mod grid;
 pub mod model;
 pub mod orbit;

@@ -9,9 +9,13 @@ use std::time::Instant as WallClock;
 use clap::{ArgGroup, Args};
 use serde::Serialize;
 
+use bistable_analysis::event_log::{
+    mode_name, Cell, Closing, EventLog, Row, StickRow, IMPACT_COLUMNS, SNAP_COLUMNS,
+    STICKING_COLUMNS,
+};
 use bistable_analysis::schedule::{earliest, Schedule};
 use bistable_analysis::Model;
-use bistable_core::{ContactMode, Event, Impact, Observer, State};
+use bistable_core::{Event, Impact, Observer, State};
 
 use crate::common::{positive, Chatter, CommonArgs};
 use crate::error::CliError;
@@ -21,12 +25,6 @@ use crate::progress::Progress;
 
 const TAU: f64 = std::f64::consts::TAU;
 
-/// Header of the impacts file (fixed by the interface spec).
-pub const IMPACTS_HEADER: &str = "index,t,phase,x,v_before,v_after,delta_k";
-/// Header of the sticking-intervals file.
-pub const STICKING_HEADER: &str = "start,end,x_start,x_end";
-/// Header of the snap-throughs file.
-pub const SNAPS_HEADER: &str = "t,v,to_well";
 /// Header of the trace file.
 pub const TRACE_HEADER: &str = "t,x,v,z,zdot";
 
@@ -186,90 +184,60 @@ struct PlotEvents {
     dk0: f64,
 }
 
-/// Receives the simulator's events and writes them out.
+/// Receives the simulator's events and writes the rows of its event log out.
 struct Recorder {
+    log: EventLog,
     impacts_csv: Option<CsvFile>,
     sticking_csv: Option<CsvFile>,
     snaps_csv: Option<CsvFile>,
-    impacts: u64,
-    sticks: u64,
-    snaps: u64,
-    open_stick: Option<(f64, f64)>,
-    last_impact: Option<Impact>,
     plot: Option<PlotEvents>,
     error: Option<CliError>,
 }
 
+/// A cell of the event log as a CSV field.
+fn field(c: Cell) -> Field<'static> {
+    match c {
+        Cell::Int(i) => Field::I(i),
+        Cell::Real(v) => Field::F(v),
+        Cell::Missing => Field::Empty,
+    }
+}
+
 impl Recorder {
-    fn record(&mut self, event: &Event) -> Result<(), CliError> {
-        match *event {
-            Event::Impact(imp) => {
-                self.impacts += 1;
-                self.last_impact = Some(imp);
-                if let Some(csv) = &mut self.impacts_csv {
-                    csv.row(&[
-                        Field::I(imp.index),
-                        Field::F(imp.t),
-                        imp.phase.map_or(Field::Empty, Field::F),
-                        Field::F(imp.x),
-                        Field::F(imp.v_before),
-                        Field::F(imp.v_after),
-                        Field::F(imp.delta_k),
-                    ])?;
-                }
-                if let Some(p) = &mut self.plot {
-                    if imp.t >= p.window_start {
-                        p.marks.push((imp.t, imp.x, imp.v_before, imp.v_after));
+    /// Writes the rows the log has completed.
+    fn write_rows(&mut self) -> Result<(), CliError> {
+        for row in self.log.rows() {
+            match row {
+                Row::Impact(r) => {
+                    if let Some(csv) = &mut self.impacts_csv {
+                        csv.row(&r.cells().map(field))?;
                     }
-                    if p.energy.len() == p.cap {
-                        p.energy.pop_front();
-                    }
-                    p.energy.push_back((
-                        imp.index,
-                        imp.t,
-                        imp.phase.unwrap_or(f64::NAN),
-                        imp.delta_k / p.dk0,
-                    ));
-                }
-            }
-            Event::StickStart { t, x, .. } => {
-                self.sticks += 1;
-                if let Some((t0, x0)) = self.open_stick.replace((t, x)) {
-                    // A second start without an end: close the first one where the next begins.
-                    self.write_stick(Some(t0), Some(x0), Some(t), Some(x))?;
-                }
-            }
-            Event::StickEnd { t, x, .. } => {
-                if let (Some(p), Some((t0, _))) = (&mut self.plot, self.open_stick) {
-                    if t >= p.window_start {
-                        p.sticking.push((t0, Some(t)));
+                    if let Some(p) = &mut self.plot {
+                        p.impact(&r.impact);
                     }
                 }
-                let (t0, x0) = self.open_stick.take().unzip();
-                self.write_stick(t0, x0, Some(t), Some(x))?;
-            }
-            Event::SnapThrough { t, v, to } => {
-                self.snaps += 1;
-                if let Some(csv) = &mut self.snaps_csv {
-                    csv.row(&[Field::F(t), Field::F(v), Field::I(u64::from(to.number()))])?;
+                Row::Stick(r) => {
+                    if let Some(csv) = &mut self.sticking_csv {
+                        csv.row(&r.cells().map(field))?;
+                    }
+                    if let Some(p) = &mut self.plot {
+                        p.stick(&r);
+                    }
+                }
+                Row::Snap(r) => {
+                    if let Some(csv) = &mut self.snaps_csv {
+                        csv.row(&r.cells().map(field))?;
+                    }
                 }
             }
         }
         Ok(())
     }
 
-    fn write_stick(
-        &mut self,
-        start: Option<f64>,
-        x_start: Option<f64>,
-        end: Option<f64>,
-        x_end: Option<f64>,
-    ) -> Result<(), CliError> {
-        let f = |v: Option<f64>| v.map_or(Field::Empty, Field::F);
-        match &mut self.sticking_csv {
-            Some(csv) => csv.row(&[f(start), f(end), f(x_start), f(x_end)]),
-            None => Ok(()),
-        }
+    /// Closes the log at the end of the run and writes its last rows.
+    fn finish(&mut self) -> Result<(), CliError> {
+        self.log.finish();
+        self.write_rows()
     }
 
     /// The first error met while recording, if any.
@@ -278,9 +246,38 @@ impl Recorder {
     }
 }
 
+impl PlotEvents {
+    fn impact(&mut self, imp: &Impact) {
+        if imp.t >= self.window_start {
+            self.marks.push((imp.t, imp.x, imp.v_before, imp.v_after));
+        }
+        if self.energy.len() == self.cap {
+            self.energy.pop_front();
+        }
+        self.energy.push_back((
+            imp.index,
+            imp.t,
+            imp.phase.unwrap_or(f64::NAN),
+            imp.delta_k / self.dk0,
+        ));
+    }
+
+    /// Intervals that ended in a release in the window, and the one still open at the end.
+    fn stick(&mut self, r: &StickRow) {
+        match (r.closing, r.start, r.end) {
+            (Closing::Release, Some(t0), Some(t)) if t >= self.window_start => {
+                self.sticking.push((t0, Some(t)));
+            }
+            (Closing::EndOfRun, Some(t0), _) => self.sticking.push((t0, None)),
+            _ => {}
+        }
+    }
+}
+
 impl Observer for Recorder {
     fn event(&mut self, event: &Event) -> ControlFlow<()> {
-        match self.record(event) {
+        self.log.record(event);
+        match self.write_rows() {
             Ok(()) => ControlFlow::Continue(()),
             Err(e) => {
                 self.error = Some(e);
@@ -351,13 +348,6 @@ struct Files {
     snaps: Option<PathBuf>,
     trace: Option<PathBuf>,
     plots: Vec<PathBuf>,
-}
-
-fn mode_name(mode: ContactMode) -> &'static str {
-    match mode {
-        ContactMode::Free => "free",
-        ContactMode::Sticking => "sticking",
-    }
 }
 
 /// Validated options of a run.
@@ -439,24 +429,23 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
 
     let mut files = Files::default();
     let mut rec = Recorder {
+        log: EventLog::new(),
         impacts_csv: None,
         sticking_csv: None,
         snaps_csv: None,
-        impacts: 0,
-        sticks: 0,
-        snaps: 0,
-        open_stick: None,
-        last_impact: None,
         plot: None,
         error: None,
     };
     if let Some(path) = &args.impacts {
-        rec.impacts_csv = Some(CsvFile::create(path, IMPACTS_HEADER)?);
+        rec.impacts_csv = Some(CsvFile::create(path, &IMPACT_COLUMNS.join(","))?);
         rec.sticking_csv = Some(CsvFile::create(
             &sibling(path, "_sticking.csv"),
-            STICKING_HEADER,
+            &STICKING_COLUMNS.join(","),
         )?);
-        rec.snaps_csv = Some(CsvFile::create(&sibling(path, "_snaps.csv"), SNAPS_HEADER)?);
+        rec.snaps_csv = Some(CsvFile::create(
+            &sibling(path, "_snaps.csv"),
+            &SNAP_COLUMNS.join(","),
+        )?);
     }
     let mut trace = match &args.trace {
         Some(path) => {
@@ -531,9 +520,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     }
 
     // Close the files.
-    if let Some((t0, x0)) = rec.open_stick {
-        rec.write_stick(Some(t0), Some(x0), None, None)?;
-    }
+    rec.finish()?;
     if let Some(csv) = rec.impacts_csv.take() {
         files.impacts = Some(csv.finish()?);
     }
@@ -549,10 +536,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     let wall_time_s = clock.elapsed().as_secs_f64();
 
     let plot_clock = WallClock::now();
-    if let (Some(dir), Some(mut events)) = (&args.plot, rec.plot.take()) {
-        if let Some((t0, _)) = rec.open_stick {
-            events.sticking.push((t0, None));
-        }
+    if let (Some(dir), Some(events)) = (&args.plot, rec.plot.take()) {
         let data = PlotData {
             model,
             t_end,
@@ -562,7 +546,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
             sticking: events.sticking,
             poincare,
             energy: events.energy.into_iter().collect(),
-            total_impacts: rec.impacts,
+            total_impacts: rec.log.impacts(),
         };
         files.plots = plot::draw_all(dir, &data)?;
     }
@@ -579,9 +563,9 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
         t_end,
         natural_periods: t_end / TAU,
         shaker_periods: t_end / model.shaker_period(),
-        impacts: rec.impacts,
-        sticking_intervals: rec.sticks,
-        snap_throughs: rec.snaps,
+        impacts: rec.log.impacts(),
+        sticking_intervals: rec.log.sticks(),
+        snap_throughs: rec.log.snaps(),
         final_well: fin.well.number(),
         final_state: FinalState {
             t: fin.t,
@@ -594,7 +578,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
             kinetic_energy: fin.kinetic_energy(),
             potential_energy: fin.potential_energy(),
         },
-        last_impact: rec.last_impact.map(|i| ImpactJson {
+        last_impact: rec.log.last_impact().map(|i| ImpactJson {
             index: i.index,
             t: i.t,
             phase: i.phase,

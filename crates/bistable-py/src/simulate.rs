@@ -8,10 +8,12 @@ use pyo3::exceptions::{PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyBytes, PyDict, PyList};
 
-use bistable_analysis::schedule::Schedule;
-use bistable_core::{
-    Checkpoint, ContactMode, Event, Observer, PlateRecord, SimError, Simulator, State, StickCause,
+use bistable_analysis::event_log::{
+    cause_name, mode_name, Cell, EventLog, Row, IMPACT_COLUMNS, INTEGER_COLUMNS, SNAP_COLUMNS,
+    STICKING_COLUMNS,
 };
+use bistable_analysis::schedule::Schedule;
+use bistable_core::{Checkpoint, Event, Observer, PlateRecord, SimError, Simulator, State};
 
 use crate::common::{check_scope, invalid, model, positive, released, sim_err, table, Col, Real};
 
@@ -31,22 +33,6 @@ fn too_many_events(t: f64) -> PyErr {
          Simulator.advance_to with a callback"
     ))
 }
-fn mode_name(m: ContactMode) -> &'static str {
-    match m {
-        ContactMode::Free => "free",
-        ContactMode::Sticking => "sticking",
-    }
-}
-
-fn cause_name(c: StickCause) -> &'static str {
-    match c {
-        StickCause::Accumulation => "accumulation",
-        StickCause::FixedGap => "fixed_gap",
-        StickCause::Plastic => "plastic",
-        StickCause::ZenoGuard => "zeno_guard",
-    }
-}
-
 /// Seconds since the Unix epoch (to compare instants between threads).
 fn epoch_s() -> f64 {
     SystemTime::now()
@@ -54,68 +40,69 @@ fn epoch_s() -> f64 {
         .map_or(0.0, |d| d.as_secs_f64())
 }
 
-/// Everything `simulate` returns, gathered from the event stream.
+/// Everything `simulate` returns, gathered from the event stream: the event log's tables as
+/// columns.
 #[derive(Default)]
 struct Log {
+    log: EventLog,
     /// `index, t, phase, x, v_before, v_after, delta_k`.
     impacts: [Col; 7],
-    /// `start, end, x_start, x_end` (NaN: still open).
+    /// `start, end, x_start, x_end` (NaN: missing).
     sticking: [Col; 4],
     /// `t, v, to_well`.
     snaps: [Col; 3],
-    open_stick: Option<(f64, f64)>,
     /// Events logged (all kinds); the advance stops at [`MAX_EVENTS`].
     events_n: u64,
-    impacts_n: u64,
-    sticks_n: u64,
-    snaps_n: u64,
-    last_impact: Option<bistable_core::Impact>,
+}
+
+/// Appends a row of cells to columns (a missing value as NaN).
+fn push_row<const N: usize>(cols: &mut [Col; N], cells: [Cell; N]) {
+    for (c, cell) in cols.iter_mut().zip(cells) {
+        match cell {
+            Cell::Int(i) => c.i(i as i64),
+            Cell::Real(v) => c.f(v),
+            Cell::Missing => c.f(f64::NAN),
+        }
+    }
+}
+
+/// A table's columns with their names and dtypes.
+fn columns<const N: usize>(
+    names: &[&'static str; N],
+    cols: [Col; N],
+) -> Vec<(&'static str, &'static str, Col)> {
+    let dtype = |n: &str| {
+        if INTEGER_COLUMNS.contains(&n) {
+            "i8"
+        } else {
+            "f8"
+        }
+    };
+    names
+        .iter()
+        .zip(cols)
+        .map(|(&n, c)| (n, dtype(n), c))
+        .collect()
 }
 
 impl Log {
-    fn stick_row(&mut self, start: f64, end: f64, x0: f64, x1: f64) {
-        let [a, b, c, d] = &mut self.sticking;
-        a.f(start);
-        b.f(end);
-        c.f(x0);
-        d.f(x1);
+    /// Moves the rows the log has completed into the columns.
+    fn take_rows(&mut self) {
+        for row in self.log.rows() {
+            match row {
+                Row::Impact(r) => push_row(&mut self.impacts, r.cells()),
+                Row::Stick(r) => push_row(&mut self.sticking, r.cells()),
+                Row::Snap(r) => push_row(&mut self.snaps, r.cells()),
+            }
+        }
     }
 }
 
 impl Observer for Log {
     fn event(&mut self, event: &Event) -> ControlFlow<()> {
         self.events_n += 1;
-        match *event {
-            Event::Impact(i) => {
-                self.impacts_n += 1;
-                self.last_impact = Some(i);
-                let c = &mut self.impacts;
-                c[0].i(i.index as i64);
-                c[1].f(i.t);
-                c[2].f(i.phase.unwrap_or(f64::NAN));
-                c[3].f(i.x);
-                c[4].f(i.v_before);
-                c[5].f(i.v_after);
-                c[6].f(i.delta_k);
-            }
-            Event::StickStart { t, x, .. } => {
-                self.sticks_n += 1;
-                if let Some((t0, x0)) = self.open_stick.replace((t, x)) {
-                    // A second start without an end closes the first where the next begins.
-                    self.stick_row(t0, t, x0, x);
-                }
-            }
-            Event::StickEnd { t, x, .. } => {
-                let (t0, x0) = self.open_stick.take().unwrap_or((f64::NAN, f64::NAN));
-                self.stick_row(t0, t, x0, x);
-            }
-            Event::SnapThrough { t, v, to } => {
-                self.snaps_n += 1;
-                self.snaps[0].f(t);
-                self.snaps[1].f(v);
-                self.snaps[2].i(i64::from(to.number()));
-            }
-        }
+        self.log.record(event);
+        self.take_rows();
         if self.events_n >= MAX_EVENTS {
             ControlFlow::Break(())
         } else {
@@ -255,48 +242,16 @@ pub(crate) fn simulate<'py>(
     let wall_time_s = clock.elapsed().as_secs_f64();
     let finished_at = epoch_s();
     let fin = sim.state();
-    if let Some((t0, x0)) = log.open_stick.take() {
-        log.stick_row(t0, f64::NAN, x0, f64::NAN);
-    }
+    log.log.finish();
+    log.take_rows();
 
     let out = PyDict::new(py);
-    let [index, t, phase, x, vb, va, dk] = std::mem::take(&mut log.impacts);
-    out.set_item(
-        "impacts",
-        table(
-            py,
-            vec![
-                ("index", "i8", index),
-                ("t", "f8", t),
-                ("phase", "f8", phase),
-                ("x", "f8", x),
-                ("v_before", "f8", vb),
-                ("v_after", "f8", va),
-                ("delta_k", "f8", dk),
-            ],
-        )?,
-    )?;
-    let [s0, s1, x0, x1] = std::mem::take(&mut log.sticking);
-    out.set_item(
-        "sticking",
-        table(
-            py,
-            vec![
-                ("start", "f8", s0),
-                ("end", "f8", s1),
-                ("x_start", "f8", x0),
-                ("x_end", "f8", x1),
-            ],
-        )?,
-    )?;
-    let [st, sv, sw] = std::mem::take(&mut log.snaps);
-    out.set_item(
-        "snaps",
-        table(
-            py,
-            vec![("t", "f8", st), ("v", "f8", sv), ("to_well", "i8", sw)],
-        )?,
-    )?;
+    let impacts = columns(&IMPACT_COLUMNS, std::mem::take(&mut log.impacts));
+    out.set_item("impacts", table(py, impacts)?)?;
+    let sticking = columns(&STICKING_COLUMNS, std::mem::take(&mut log.sticking));
+    out.set_item("sticking", table(py, sticking)?)?;
+    let snaps = columns(&SNAP_COLUMNS, std::mem::take(&mut log.snaps));
+    out.set_item("snaps", table(py, snaps)?)?;
     if trace_dt.is_some() {
         let names = ["t", "x", "v", "z", "zdot"];
         let cols = names.into_iter().zip(tr).map(|(n, c)| (n, "f8", c));
@@ -317,12 +272,12 @@ pub(crate) fn simulate<'py>(
     s.set_item("t_end", t_end)?;
     s.set_item("natural_periods", t_end / TAU)?;
     s.set_item("shaker_periods", t_end / m.shaker_period())?;
-    s.set_item("impacts", log.impacts_n)?;
-    s.set_item("sticking_intervals", log.sticks_n)?;
-    s.set_item("snap_throughs", log.snaps_n)?;
+    s.set_item("impacts", log.log.impacts())?;
+    s.set_item("sticking_intervals", log.log.sticks())?;
+    s.set_item("snap_throughs", log.log.snaps())?;
     s.set_item("final_well", fin.well.number())?;
     s.set_item("final_state", fs)?;
-    match log.last_impact {
+    match log.log.last_impact() {
         Some(i) => {
             let e = event_dict(py, &Event::Impact(i))?;
             e.del_item("kind")?;

@@ -15,6 +15,7 @@
 
 use std::collections::VecDeque;
 
+use bistable_analysis::event_log::{EventLog, Row};
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Params, PlateMotion, PolyPiece, SetpointRamp,
     SimError, Simulator, Sinusoid, SolverOptions,
@@ -104,10 +105,9 @@ pub struct Runner {
     ramp: Option<SetpointRamp>,
     /// Centre of the shaker's sinusoids (the initial one's), nondimensional.
     centre: f64,
-    /// The last impact, held until it is known whether sticking follows it.
-    pending: Option<Impact>,
-    /// How long after an impact its sticking can start (nondimensional time).
-    lookahead: f64,
+    /// Turns events into impacts, each held until it is known whether sticking follows it
+    /// (for as long after it as sticking can start).
+    log: EventLog,
     events: Vec<Event>,
     notes: Vec<String>,
     halted: Option<String>,
@@ -139,8 +139,7 @@ impl Runner {
             piece_end: None,
             ramp: None,
             centre: plate.origin().2,
-            pending: None,
-            lookahead,
+            log: EventLog::with_lookahead(lookahead),
             events: Vec::new(),
             notes: Vec::new(),
             halted: None,
@@ -190,9 +189,8 @@ impl Runner {
         }
         let sim = Simulator::with_state(params, motion, SolverOptions::default(), 0.0, xn, vn)
             .map_err(|e| e.to_string())?;
-        if let Some(p) = self.pending.take() {
-            impacts.push(self.impact_msg(&p, false));
-        }
+        self.log.finish();
+        self.collect_rows(impacts);
         self.sim = sim;
         self.tick_origin = 0.0;
         self.tick_k = 0;
@@ -518,35 +516,23 @@ impl Runner {
 
     /// Turns the collected events into complete impacts.
     fn collect(&mut self, out: &mut Vec<ImpactEvent>) {
-        for e in std::mem::take(&mut self.events).drain(..) {
-            if let Some(p) = self.pending {
-                if e.t() - p.t > self.lookahead {
-                    out.push(self.impact_msg(&p, false));
-                    self.pending = None;
-                }
+        for mut e in std::mem::take(&mut self.events).drain(..) {
+            // On a ramp's pieces the shaker phase is the ramp's.
+            if let (Event::Impact(i), Some(ramp)) = (&mut e, &self.ramp) {
+                i.phase = ramp.impact_phase(i);
             }
-            match e {
-                Event::Impact(mut i) => {
-                    // On a ramp's pieces the shaker phase is the ramp's.
-                    if let Some(ramp) = &self.ramp {
-                        i.phase = ramp.impact_phase(&i);
-                    }
-                    if let Some(p) = self.pending.replace(i) {
-                        out.push(self.impact_msg(&p, false));
-                    }
-                }
-                Event::StickStart { impacts, .. } => {
-                    if let Some(p) = self.pending.take() {
-                        out.push(self.impact_msg(&p, impacts == p.index + 1));
-                    }
-                }
-                Event::StickEnd { .. } | Event::SnapThrough { .. } => {}
-            }
+            self.log.record(&e);
         }
-        if let Some(p) = self.pending {
-            if self.sim.time() - p.t > self.lookahead {
-                out.push(self.impact_msg(&p, false));
-                self.pending = None;
+        self.log.settle(self.sim.time());
+        self.collect_rows(out);
+    }
+
+    /// Appends the impacts the log has completed.
+    fn collect_rows(&mut self, out: &mut Vec<ImpactEvent>) {
+        let rows: Vec<Row> = self.log.rows().collect();
+        for row in rows {
+            if let Row::Impact(r) = row {
+                out.push(self.impact_msg(&r.impact, r.ended_in_sticking));
             }
         }
     }
