@@ -15,7 +15,7 @@ use bistable_analysis::event_log::{
 };
 use bistable_analysis::schedule::{earliest, Schedule};
 use bistable_analysis::Model;
-use bistable_core::{Event, Impact, Observer, State};
+use bistable_core::{Event, Impact, Observer, SimError, State};
 
 use crate::common::{positive, Chatter, CommonArgs};
 use crate::error::CliError;
@@ -238,6 +238,15 @@ impl Recorder {
     fn finish(&mut self) -> Result<(), CliError> {
         self.log.finish();
         self.write_rows()
+    }
+
+    /// `reached`, after writing the rows the log still holds when the run failed (the impacts
+    /// up to the failure are all in the files).
+    fn written_if_failed<T>(&mut self, reached: Result<T, SimError>) -> Result<T, CliError> {
+        if reached.is_err() {
+            self.finish()?;
+        }
+        Ok(reached?)
     }
 
     /// The first error met while recording, if any.
@@ -491,7 +500,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     while let Some(next) = earliest(&[&trace_times, &plot_times, &poincare_times, &chunks]) {
         let reached = sim.advance(next, &mut rec);
         rec.check()?;
-        reached?;
+        rec.written_if_failed(reached)?;
         let st = sim.state();
         if trace_times.take(next) {
             if let Some(csv) = &mut trace {
@@ -510,7 +519,7 @@ pub fn run(args: &SimulateArgs) -> Result<(), CliError> {
     }
     let reached = sim.advance(t_end, &mut rec);
     rec.check()?;
-    reached?;
+    rec.written_if_failed(reached)?;
     progress.finish();
     let fin = sim.state();
     if let Some(p) = &rec.plot {
