@@ -36,8 +36,8 @@ use bistable_core::{
 use crate::md::var;
 use crate::model::{
     below_plate, describe_event, origin_in_range, plate_inputs, plate_piece, restore_phase_ref,
-    save_phase_ref, Mass, Observed, Plate, PlateInputs, Scale, Setup, ShakerMode, VarSet, ALL,
-    MAX_CLOCK_SPAN,
+    save_phase_ref, scale_of, Mass, Observed, Plate, PlateInputs, Scale, Setup, ShakerMode, VarSet,
+    ALL, MAX_CLOCK_SPAN,
 };
 use crate::num::Num;
 
@@ -323,7 +323,7 @@ impl Me {
 
     /// Nominal magnitudes of the continuous states (SI): `Δx`, `ω0Δx`.
     pub fn nominals(values: &[f64]) -> [f64; 2] {
-        let sc = Scale::of(values);
+        let sc = scale_of(values);
         [sc.dx, sc.velocity(1.0)]
     }
 

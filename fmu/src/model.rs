@@ -94,64 +94,14 @@ impl Reconstruction {
     }
 }
 
-/// Conversions between SI and the core's units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Scale {
-    /// `ω0` (rad/s).
-    pub omega0: f64,
-    /// `Δx` (m).
-    pub dx: f64,
-    /// Mass (kg), for energies only.
-    pub mass: f64,
-}
+pub use bistable_core::units::Scale;
 
-impl Scale {
-    /// From the parameter values.
-    pub fn of(values: &[f64]) -> Self {
-        Self {
-            omega0: values[var::omega0],
-            dx: values[var::delta_x],
-            mass: values[var::mass],
-        }
-    }
-
-    /// `τ` of the SI time `t` (s).
-    pub fn tau(&self, t: f64) -> f64 {
-        t * self.omega0
-    }
-
-    /// SI time (s) of `τ`.
-    pub fn time(&self, tau: f64) -> f64 {
-        tau / self.omega0
-    }
-
-    /// Length (m).
-    pub fn length(&self, x: f64) -> f64 {
-        x * self.dx
-    }
-
-    /// Velocity (m/s).
-    pub fn velocity(&self, v: f64) -> f64 {
-        v * (self.omega0 * self.dx)
-    }
-
-    /// Acceleration (m/s²).
-    pub fn acceleration(&self, a: f64) -> f64 {
-        a * (self.omega0 * self.omega0 * self.dx)
-    }
-
-    /// Energy (J).
-    pub fn energy(&self, e: f64) -> f64 {
-        e * (self.mass * self.omega0 * self.omega0 * self.dx * self.dx)
-    }
-
-    /// Nondimensional Taylor coefficient `z_k` of the SI plate derivative `d^k ẑ/dt^k`.
-    pub fn plate_coefficient(&self, k: usize, d: f64) -> f64 {
-        let mut c = d / self.dx;
-        for j in 1..=k {
-            c /= self.omega0 * j as f64;
-        }
-        c
+/// The SI scales of the parameter values.
+pub fn scale_of(values: &[f64]) -> Scale {
+    Scale {
+        omega0: values[var::omega0],
+        dx: values[var::delta_x],
+        mass: values[var::mass],
     }
 }
 
@@ -360,7 +310,7 @@ impl Model {
 
     /// Rebuilds a model from its saved parts (see `state.rs`).
     pub fn restore(values: &[f64], saved: &SavedModel) -> Result<Self, String> {
-        let scale = Scale::of(values);
+        let scale = scale_of(values);
         let cp = &saved.checkpoint;
         let same = [
             (cp.zeta, values[var::zeta]),
@@ -1008,7 +958,7 @@ pub struct Setup {
 impl Setup {
     /// Checks the parameters and converts them for a start at `t_start` (s).
     pub fn of(values: &[f64], t_start: f64) -> Result<Self, String> {
-        let scale = Scale::of(values);
+        let scale = scale_of(values);
         let mode = ShakerMode::of(values[var::shaker_mode])
             .ok_or_else(|| format!("invalid shaker_mode = {}", values[var::shaker_mode]))?;
         let params =
@@ -1030,8 +980,8 @@ impl Setup {
             opts,
             phase_ref,
             origin,
-            x0: values[var::x0] / scale.dx,
-            v0: values[var::v0] / (scale.omega0 * scale.dx),
+            x0: scale.of_length(values[var::x0]),
+            v0: scale.of_velocity(values[var::v0]),
         })
     }
 }

@@ -34,6 +34,7 @@ pub mod shooting;
 pub mod simulator;
 pub mod taylor;
 pub mod time;
+pub mod units;
 
 pub use audit::GapAudit;
 pub use batch::{Batch, JoinError, LaneObserver};
