@@ -24,6 +24,7 @@ pub mod codec;
 pub mod events;
 pub mod interrupt;
 pub mod lanes;
+pub mod law;
 pub mod params;
 pub mod potential;
 pub mod ramp;
