@@ -27,6 +27,7 @@
 
 use std::ops::ControlFlow;
 
+use bistable_core::law::{self, Contact};
 use bistable_core::potential;
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Observer, Params, PlateMotion, Simulator,
@@ -36,8 +37,8 @@ use bistable_core::{
 use crate::md::var;
 use crate::model::{
     below_plate, describe_event, origin_in_range, plate_inputs, plate_piece, restore_phase_ref,
-    save_phase_ref, Mass, Observed, Plate, PlateInputs, Scale, Setup, ShakerMode, VarSet, ALL,
-    MAX_CLOCK_SPAN,
+    save_phase_ref, scale_of, Mass, Observed, Plate, PlateInputs, Scale, Setup, ShakerMode, VarSet,
+    ALL, MAX_CLOCK_SPAN,
 };
 use crate::num::Num;
 
@@ -323,7 +324,7 @@ impl Me {
 
     /// Nominal magnitudes of the continuous states (SI): `Δx`, `ω0Δx`.
     pub fn nominals(values: &[f64]) -> [f64; 2] {
-        let sc = Scale::of(values);
+        let sc = scale_of(values);
         [sc.dx, sc.velocity(1.0)]
     }
 
@@ -434,11 +435,7 @@ impl Me {
                 self.apply_tail(events);
                 let s = &mut self.s;
                 (s.contact, s.x, s.v) = (ContactMode::Free, z, zd);
-                events.push(Event::StickEnd {
-                    t: s.tau,
-                    x: z,
-                    v: zd,
-                });
+                events.push(law::release(s.tau, z, zd));
                 up.states_changed = true;
             }
             ContactMode::Sticking => {}
@@ -448,11 +445,7 @@ impl Me {
         if well != s.well {
             s.well = well;
             s.snap_throughs += 1;
-            events.push(Event::SnapThrough {
-                t: s.tau,
-                v: s.v,
-                to: well,
-            });
+            events.push(law::snap_through(s.tau, s.v, well));
         }
         Ok(up)
     }
@@ -462,18 +455,20 @@ impl Me {
         let (z, zd, zdd) = self.plate(values);
         let now = Instant::new(self.s.tau);
         let v_before = self.s.v;
-        let w_plus = self.params.rebound(v_before - zd);
-        let v_after = w_plus + zd;
-        let imp = Impact {
-            index: self.s.impacts,
-            t: self.s.tau,
-            phase: (self.mode == ShakerMode::Internal).then(|| self.phase_ref.phase_cycles(now)),
-            x: z,
-            v_before,
-            v_after,
-            zdot: zd,
-            delta_k: 0.5 * (v_after * v_after - v_before * v_before),
-        };
+        let (imp, w_plus) = law::impact_law(
+            &self.params,
+            &Contact {
+                index: self.s.impacts,
+                t: self.s.tau,
+                phase: (self.mode == ShakerMode::Internal)
+                    .then(|| self.phase_ref.phase_cycles(now)),
+                z,
+                zdot: zd,
+                w_minus: v_before - zd,
+                v_before,
+            },
+        );
+        let v_after = imp.v_after;
         let s = &mut self.s;
         s.impacts += 1;
         s.last_impact = Some(imp);
@@ -553,12 +548,7 @@ impl Me {
     /// Puts the mass on the plate (mode only: the caller sets the states) and reports it.
     fn stick(&mut self, t: f64, cause: StickCause, events: &mut Vec<Event>) {
         self.s.contact = ContactMode::Sticking;
-        events.push(Event::StickStart {
-            t,
-            x: self.s.x,
-            cause,
-            impacts: self.s.impacts,
-        });
+        events.push(law::stick_start(t, self.s.x, cause, self.s.impacts));
     }
 
     /// A line for the `logEvents` category.

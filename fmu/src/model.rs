@@ -10,6 +10,7 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use bistable_core::interrupt::{with_check, Check, CHECK_EVERY};
+use bistable_core::sampled::{taylor_piece, TaylorPieceError};
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
     Params, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator,
@@ -94,64 +95,14 @@ impl Reconstruction {
     }
 }
 
-/// Conversions between SI and the core's units.
-#[derive(Debug, Clone, Copy, PartialEq)]
-pub struct Scale {
-    /// `ω0` (rad/s).
-    pub omega0: f64,
-    /// `Δx` (m).
-    pub dx: f64,
-    /// Mass (kg), for energies only.
-    pub mass: f64,
-}
+pub use bistable_core::units::Scale;
 
-impl Scale {
-    /// From the parameter values.
-    pub fn of(values: &[f64]) -> Self {
-        Self {
-            omega0: values[var::omega0],
-            dx: values[var::delta_x],
-            mass: values[var::mass],
-        }
-    }
-
-    /// `τ` of the SI time `t` (s).
-    pub fn tau(&self, t: f64) -> f64 {
-        t * self.omega0
-    }
-
-    /// SI time (s) of `τ`.
-    pub fn time(&self, tau: f64) -> f64 {
-        tau / self.omega0
-    }
-
-    /// Length (m).
-    pub fn length(&self, x: f64) -> f64 {
-        x * self.dx
-    }
-
-    /// Velocity (m/s).
-    pub fn velocity(&self, v: f64) -> f64 {
-        v * (self.omega0 * self.dx)
-    }
-
-    /// Acceleration (m/s²).
-    pub fn acceleration(&self, a: f64) -> f64 {
-        a * (self.omega0 * self.omega0 * self.dx)
-    }
-
-    /// Energy (J).
-    pub fn energy(&self, e: f64) -> f64 {
-        e * (self.mass * self.omega0 * self.omega0 * self.dx * self.dx)
-    }
-
-    /// Nondimensional Taylor coefficient `z_k` of the SI plate derivative `d^k ẑ/dt^k`.
-    pub fn plate_coefficient(&self, k: usize, d: f64) -> f64 {
-        let mut c = d / self.dx;
-        for j in 1..=k {
-            c /= self.omega0 * j as f64;
-        }
-        c
+/// The SI scales of the parameter values.
+pub fn scale_of(values: &[f64]) -> Scale {
+    Scale {
+        omega0: values[var::omega0],
+        dx: values[var::delta_x],
+        mass: values[var::mass],
     }
 }
 
@@ -360,7 +311,7 @@ impl Model {
 
     /// Rebuilds a model from its saved parts (see `state.rs`).
     pub fn restore(values: &[f64], saved: &SavedModel) -> Result<Self, String> {
-        let scale = Scale::of(values);
+        let scale = scale_of(values);
         let cp = &saved.checkpoint;
         let same = [
             (cp.zeta, values[var::zeta]),
@@ -1008,7 +959,7 @@ pub struct Setup {
 impl Setup {
     /// Checks the parameters and converts them for a start at `t_start` (s).
     pub fn of(values: &[f64], t_start: f64) -> Result<Self, String> {
-        let scale = Scale::of(values);
+        let scale = scale_of(values);
         let mode = ShakerMode::of(values[var::shaker_mode])
             .ok_or_else(|| format!("invalid shaker_mode = {}", values[var::shaker_mode]))?;
         let params =
@@ -1030,8 +981,8 @@ impl Setup {
             opts,
             phase_ref,
             origin,
-            x0: values[var::x0] / scale.dx,
-            v0: values[var::v0] / (scale.omega0 * scale.dx),
+            x0: scale.of_length(values[var::x0]),
+            v0: scale.of_velocity(values[var::v0]),
         })
     }
 }
@@ -1225,13 +1176,9 @@ pub struct SavedModel {
     pub at_event: bool,
 }
 
-/// The plate over `[start, end]` (τ) from the inputs: their Taylor polynomial at the step start
-/// (`canInterpolateInputs`), plus a blend `δ(1 − 3σ² + 2σ³)`, `σ = (τ − start)/(end − start)`,
-/// that removes the difference `δ = z_now − z_in` between where the plate is and where the
-/// inputs put it. The plate position stays continuous (the core refuses jumps) and reaches the
-/// inputs' extrapolation by the end of the step; `δ` is zero for inputs that extrapolate exactly.
-/// A step too short for the blend (its coefficients `∝ δ/len³` overflow) carries `δ` over to the
-/// next step. `z_now = None`: the plate starts at `z_in` (initialization).
+/// The plate over `[start, end]` (τ) from the inputs (SI derivatives, `canInterpolateInputs`):
+/// their nondimensional Taylor polynomial at the step start, blended from the plate position
+/// `z_now` by [`taylor_piece`] (`None`: the plate starts at `z_in`, initialization).
 pub(crate) fn plate_piece(
     scale: &Scale,
     start: Instant,
@@ -1243,34 +1190,16 @@ pub(crate) fn plate_piece(
     for (k, (ck, d)) in c.iter_mut().zip(inputs).enumerate() {
         *ck = scale.plate_coefficient(k, d.unwrap_or(0.0));
     }
-    let len = Instant::new(end).since(start);
-    if len.is_nan() || len <= 0.0 {
-        return Err(format!(
+    taylor_piece(start, end, c, z_now).map_err(|e| match e {
+        TaylorPieceError::Empty => format!(
             "the step must end after t = {} s",
             scale.time(start.to_f64())
-        ));
-    }
-    let delta = z_now.map_or(0.0, |z| z - c[0]);
-    if let Some(z) = z_now.filter(|_| delta != 0.0) {
-        // Exactly where the plate is (`c0 + δ` may round away from it when the inputs are far
-        // from the plate, and the core refuses a plate that jumps).
-        c[0] = z;
-        let (c2, c3) = (
-            c[2] - 3.0 * delta / (len * len),
-            c[3] + 2.0 * delta / (len * len * len),
-        );
-        // A step too short to blend the difference out within doubles (e.g. 1e-200 s) leaves
-        // it to the next step: the plate stays continuous and follows the inputs' derivatives.
-        if c2.is_finite() && c3.is_finite() {
-            (c[2], c[3]) = (c2, c3);
-        }
-    }
-    if let Some(k) = c.iter().position(|v| !v.is_finite()) {
-        return Err(format!(
+        ),
+        TaylorPieceError::NotFinite(k) => format!(
             "the plate polynomial from the inputs is not finite (coefficient of order {k}); inputs z_in, zdot_in and their derivatives must be finite and moderate"
-        ));
-    }
-    PolyPiece::new(start, Instant::new(end), &c).map_err(|e| describe_param(&e))
+        ),
+        TaylorPieceError::Piece(e) => describe_param(&e),
+    })
 }
 
 #[cfg(test)]

@@ -24,6 +24,7 @@ pub mod codec;
 pub mod events;
 pub mod interrupt;
 pub mod lanes;
+pub mod law;
 pub mod params;
 pub mod potential;
 pub mod ramp;
@@ -34,6 +35,7 @@ pub mod shooting;
 pub mod simulator;
 pub mod taylor;
 pub mod time;
+pub mod units;
 
 pub use audit::GapAudit;
 pub use batch::{Batch, JoinError, LaneObserver};

@@ -284,6 +284,55 @@ fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
     c
 }
 
+/// Why [`taylor_piece`] refused a piece.
+#[derive(Debug, Clone, PartialEq)]
+pub enum TaylorPieceError {
+    /// The piece does not end after its start (or its length is NaN).
+    Empty,
+    /// The coefficient of this order is not finite.
+    NotFinite(usize),
+    /// [`PolyPiece::new`] refused the piece.
+    Piece(ParamError),
+}
+
+/// The plate over `[start, end]` (τ) from its Taylor coefficients `c` at `start` (nondimensional
+/// `z_k`), plus a blend `δ(1 − 3σ² + 2σ³)`, `σ = (τ − start)/(end − start)`, that removes the
+/// difference `δ = z_now − c0` between where the plate is and where the coefficients put it. The
+/// plate position stays continuous (the simulator refuses jumps) and reaches the Taylor
+/// polynomial by the end of the piece; `δ` is zero for inputs that extrapolate exactly. A piece
+/// too short for the blend (its coefficients `∝ δ/len³` overflow) carries `δ` over to the next
+/// one. `z_now = None`: the plate starts at `c0` (initialization).
+pub fn taylor_piece(
+    start: Instant,
+    end: f64,
+    mut c: [f64; MAX_POLY_DEGREE + 1],
+    z_now: Option<f64>,
+) -> Result<PolyPiece, TaylorPieceError> {
+    let len = Instant::new(end).since(start);
+    if len.is_nan() || len <= 0.0 {
+        return Err(TaylorPieceError::Empty);
+    }
+    let delta = z_now.map_or(0.0, |z| z - c[0]);
+    if let Some(z) = z_now.filter(|_| delta != 0.0) {
+        // Exactly where the plate is (`c0 + δ` may round away from it when the coefficients are
+        // far from the plate, and the simulator refuses a plate that jumps).
+        c[0] = z;
+        let (c2, c3) = (
+            c[2] - 3.0 * delta / (len * len),
+            c[3] + 2.0 * delta / (len * len * len),
+        );
+        // A piece too short to blend the difference out within doubles (e.g. 1e-200) leaves
+        // it to the next one: the plate stays continuous and follows the given derivatives.
+        if c2.is_finite() && c3.is_finite() {
+            (c[2], c[3]) = (c2, c3);
+        }
+    }
+    if let Some(k) = c.iter().position(|v| !v.is_finite()) {
+        return Err(TaylorPieceError::NotFinite(k));
+    }
+    PolyPiece::new(start, Instant::new(end), &c).map_err(TaylorPieceError::Piece)
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -449,5 +498,28 @@ mod tests {
         swapped.swap(1, 2);
         assert_eq!(SampleHistory::from_entries(&swapped), None);
         assert_eq!(SampleHistory::from_entries(&e[1..]), None); // oldest marked joined
+    }
+
+    #[test]
+    fn taylor_piece_blends_from_the_plate_onto_the_coefficients() {
+        let start = Instant::new(1.0);
+        let c = [0.1, 0.2, -0.4, 0.0, 0.0, 0.0];
+        let p = crate::PlateMotion::from(taylor_piece(start, 1.5, c, Some(0.25)).unwrap());
+        assert_eq!(p.motion(start).0, 0.25);
+        let s = 0.5;
+        let (z1, _, _) = p.motion(Instant::new(1.5));
+        assert!((z1 - (0.1 + 0.2 * s - 0.4 * s * s)).abs() < 1e-14, "{z1}");
+        let first = crate::PlateMotion::from(taylor_piece(start, 1.5, c, None).unwrap());
+        assert_eq!(first.motion(start).0, 0.1);
+        assert_eq!(
+            taylor_piece(start, 0.5, c, None),
+            Err(TaylorPieceError::Empty)
+        );
+        let mut bad = c;
+        bad[4] = f64::INFINITY;
+        assert_eq!(
+            taylor_piece(start, 1.5, bad, None),
+            Err(TaylorPieceError::NotFinite(4))
+        );
     }
 }

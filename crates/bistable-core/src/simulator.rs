@@ -12,6 +12,7 @@ use std::ops::ControlFlow;
 use crate::chatter;
 use crate::checkpoint::{Checkpoint, PlateRecord};
 use crate::events::{ContactMode, Event, Impact, StickCause, Well};
+use crate::law::{self, Contact};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
 use crate::roots::{first_root, first_root_from};
@@ -1141,11 +1142,7 @@ impl Simulator {
                     // Gap, its rate and (at a root of N) its curvature vanish.
                     self.pinned = if at_root { 3 } else { 2 };
                     let (z, zd, _) = self.plate.motion(t1);
-                    obs.event(&Event::StickEnd {
-                        t: t1.to_f64(),
-                        x: z,
-                        v: zd,
-                    })
+                    obs.event(&law::release(t1.to_f64(), z, zd))
                 }
                 StepEnd::Barrier => self.cross_barrier(t1, obs),
                 StepEnd::Stick(cause) => self.stick(t1, cause, false, obs),
@@ -1186,11 +1183,7 @@ impl Simulator {
             ContactMode::Free => self.w0 + self.plate.motion(t1).1,
             ContactMode::Sticking => self.plate.motion(t1).1,
         };
-        obs.event(&Event::SnapThrough {
-            t: t1.to_f64(),
-            v,
-            to: self.well,
-        })
+        obs.event(&law::snap_through(t1.to_f64(), v, self.well))
     }
 
     /// Puts the mass on the plate at `t1`. `pin_force`: the contact force is zero there (a
@@ -1209,12 +1202,12 @@ impl Simulator {
         self.mode = ContactMode::Sticking;
         self.stats.sticks += 1;
         self.short_flights = 0;
-        obs.event(&Event::StickStart {
-            t: t1.to_f64(),
-            x: self.plate.motion(t1).0,
+        obs.event(&law::stick_start(
+            t1.to_f64(),
+            self.plate.motion(t1).0,
             cause,
-            impacts: self.stats.impacts,
-        })
+            self.stats.impacts,
+        ))
     }
 
     /// Applies the impact law at `t1` with incoming relative velocity `w_minus ≤ 0`.
@@ -1226,19 +1219,18 @@ impl Simulator {
     ) -> Result<ControlFlow<()>, SimError> {
         let e = self.params.restitution();
         let (z, zd, zdd) = self.plate.motion(t1);
-        let w_plus = self.params.rebound(w_minus);
-        let v_before = w_minus + zd;
-        let v_after = w_plus + zd;
-        let imp = Impact {
-            index: self.stats.impacts,
-            t: t1.to_f64(),
-            phase: self.plate.phase_cycles(t1),
-            x: z,
-            v_before,
-            v_after,
-            zdot: zd,
-            delta_k: 0.5 * (v_after * v_after - v_before * v_before),
-        };
+        let (imp, w_plus) = law::impact_law(
+            &self.params,
+            &Contact {
+                index: self.stats.impacts,
+                t: t1.to_f64(),
+                phase: self.plate.phase_cycles(t1),
+                z,
+                zdot: zd,
+                w_minus,
+                v_before: w_minus + zd,
+            },
+        );
         self.stats.impacts += 1;
         self.last_impact = Some(imp);
         let since = self.last_impact_t.map(|p| t1.since(p));

@@ -16,6 +16,7 @@
 use std::collections::VecDeque;
 
 use bistable_analysis::event_log::{EventLog, Row};
+use bistable_core::units::Scale;
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Params, PlateMotion, PolyPiece, SetpointRamp,
     SimError, Simulator, Sinusoid, SolverOptions,
@@ -544,28 +545,37 @@ impl Runner {
         }
     }
 
+    /// The SI scales (the node publishes energies per unit mass: no mass).
+    fn scale(&self) -> Scale {
+        Scale {
+            omega0: self.omega0,
+            dx: self.delta_x,
+            mass: f64::NAN,
+        }
+    }
+
     fn impact_msg(&self, i: &Impact, ended_in_sticking: bool) -> ImpactEvent {
-        let (w, l) = (self.omega0, self.delta_x);
-        let t = i.t / w;
+        let sc = self.scale();
+        let t = sc.time(i.t);
         ImpactEvent {
             header: self.header(t),
             index: i.index,
             t,
             phase: i.phase.unwrap_or(f64::NAN),
-            x: l * i.x,
-            v_before: w * l * i.v_before,
-            v_after: w * l * i.v_after,
-            zdot: w * l * i.zdot,
-            delta_k: (w * l).powi(2) * i.delta_k,
+            x: sc.length(i.x),
+            v_before: sc.velocity(i.v_before),
+            v_after: sc.velocity(i.v_after),
+            zdot: sc.velocity(i.zdot),
+            delta_k: sc.specific_energy(i.delta_k),
             ended_in_sticking,
         }
     }
 
     /// The state at the current time, in SI units.
     pub fn state(&self) -> MassState {
-        let (w, l) = (self.omega0, self.delta_x);
+        let sc = self.scale();
         let s = self.sim.state();
-        let t = s.t / w;
+        let t = sc.time(s.t);
         // During a ramp: its target set-point.
         let sinusoid = match (self.sim.plate(), &self.ramp) {
             (PlateMotion::Sinusoid(p), _) => Some(*p),
@@ -575,20 +585,21 @@ impl Runner {
         let (mode, omega, velocity) = match sinusoid {
             Some(p) => (
                 ShakerCommand::MODE_SINUSOID,
-                p.omega() * w,
-                p.velocity() * w * l,
+                sc.frequency(p.omega()),
+                // The amplitude as it always was, `(V·ω0)·Δx` (not `V·(ω0Δx)`).
+                p.velocity() * sc.omega0 * sc.dx,
             ),
             None => (ShakerCommand::MODE_EXTERNAL, f64::NAN, f64::NAN),
         };
         MassState {
             header: self.header(t),
             t,
-            x: l * s.x,
-            v: w * l * s.v,
-            z: l * s.z,
-            zdot: w * l * s.zdot,
-            kinetic_energy: (w * l).powi(2) * s.kinetic_energy(),
-            potential_energy: (w * l).powi(2) * s.potential_energy(),
+            x: sc.length(s.x),
+            v: sc.velocity(s.v),
+            z: sc.length(s.z),
+            zdot: sc.velocity(s.zdot),
+            kinetic_energy: sc.specific_energy(s.kinetic_energy()),
+            potential_energy: sc.specific_energy(s.potential_energy()),
             well: s.well.number(),
             in_contact: s.mode == ContactMode::Sticking,
             impact_count: self.sim.stats().impacts,
