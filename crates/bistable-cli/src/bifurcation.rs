@@ -17,6 +17,7 @@ use bistable_analysis::Model;
 use crate::branches;
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
+use crate::grid::{grid_help, GridArgs};
 use crate::output::{print_json, print_text, sibling, CsvFile, Field};
 use crate::plot::{self, header, Area, DrawResult, Mark};
 use crate::progress::StageBars;
@@ -80,6 +81,11 @@ pub enum Param {
 /// Options of `bistable bifurcation`.
 #[derive(Debug, Clone, Args)]
 #[command(group(ArgGroup::new("output").required(true).multiple(true).args(["out", "plot", "json"])))]
+#[command(mut_args(grid_help(
+    "Write the recorded maxima and impact phases to FILE.csv and the orbits to <stem>_orbits.csv \
+     next to it",
+    "Draw the diagram to FILE.png"
+)))]
 pub struct BifurcationArgs {
     /// Control parameter.
     #[arg(long, value_enum, value_name = "PARAM")]
@@ -122,23 +128,8 @@ pub struct BifurcationArgs {
     #[arg(long)]
     pub no_branches: bool,
 
-    /// Write the recorded maxima and impact phases to FILE.csv and the orbits to
-    /// <stem>_orbits.csv next to it.
-    #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
-    pub out: Option<PathBuf>,
-
-    /// Draw the diagram to FILE.png.
-    #[arg(long, value_name = "FILE.png", help_heading = "Output")]
-    pub plot: Option<PathBuf>,
-
-    /// Worker threads [default: all cores].
-    #[arg(long, value_name = "N")]
-    pub threads: Option<usize>,
-
-    /// Trajectories each thread advances together in SIMD lanes: 1 (one at a time), 4 (AVX2)
-    /// or 8 (AVX-512) [default: 4]. The results are the same for every width.
-    #[arg(long, value_name = "N")]
-    pub lanes: Option<usize>,
+    #[command(flatten)]
+    pub grid: GridArgs,
 
     #[command(flatten)]
     pub model: ModelArgs,
@@ -195,8 +186,8 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
             "periods must be in [1, 64]",
         ));
     }
-    let threads = threads(args.threads, "--threads")?;
-    let width = lanes(args.lanes, "--lanes")?;
+    let threads = threads(args.grid.threads, "--threads")?;
+    let width = lanes(args.grid.lanes, "--lanes")?;
     let options = BifurcationOptions {
         transient: args.transient,
         record: args.record,
@@ -216,11 +207,11 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
     } = data;
 
     let mut files = Vec::new();
-    if let Some(path) = &args.out {
+    if let Some(path) = &args.grid.out {
         files.extend(write_csv(path, &models, &points, &branches)?);
     }
     let xs: Vec<f64> = range.values();
-    if let Some(path) = &args.plot {
+    if let Some(path) = &args.grid.plot {
         plot::png(path, (1500, 1250), |root| {
             draw(root, args, &models, &xs, &points, &branches)
         })?;

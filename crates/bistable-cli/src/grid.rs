@@ -21,8 +21,9 @@ use crate::output::{read_resumable, CsvFile, OutLock};
 use crate::progress::Progress;
 use crate::ranges::{Range, MAX_POINTS};
 
-/// The output and worker options of a grid command (flattened into its options; each command
-/// words the help of `--out` and `--plot` for its own points with [`grid_help`]).
+/// The output and worker options of a command over a grid of points (`map`, `basins`,
+/// `bifurcation`), flattened into its options; each command words the help of `--out` and
+/// `--plot` for its own points with [`grid_help`].
 #[derive(Debug, Clone, Args)]
 pub struct GridArgs {
     /// Append one row per point to FILE.csv, skipping points already in it.
