@@ -167,8 +167,12 @@ def test_a_crafted_checkpoint_within_reach_is_accepted():
     assert (got, msg) == ("returned", "True"), msg
 
 
+# Each child script starts by installing Python's own Ctrl-C handler: a process started with
+# SIGINT ignored (a background job of a non-interactive shell, as some CI runners start the
+# suite) inherits that, and Python then never raises KeyboardInterrupt.
 SIGINT_SCRIPT = """
 import os, signal, sys, threading, time
+signal.signal(signal.SIGINT, signal.default_int_handler)
 import bistable_impact as bi
 sent = []
 def fire():
@@ -240,6 +244,7 @@ def test_a_simulator_stopped_by_ctrl_c_goes_on_from_where_it_stopped():
     code = textwrap.dedent(
         """
         import os, signal, threading
+        signal.signal(signal.SIGINT, signal.default_int_handler)
         import bistable_impact as bi
         s = bi.Simulator(1.75, 0.07)
         threading.Timer(0.5, lambda: os.kill(os.getpid(), signal.SIGINT)).start()

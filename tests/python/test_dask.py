@@ -129,7 +129,8 @@ def test_ctrl_c_stops_a_local_sweep(tmp_path):
     # raise KeyboardInterrupt after the points in progress, long before the 400 points.
     script = textwrap.dedent(
         """
-        import sys
+        import signal, sys
+        signal.signal(signal.SIGINT, signal.default_int_handler)  # also when started ignored
         import bistable_impact as bi
         seen = []
         def progress(done, total):
