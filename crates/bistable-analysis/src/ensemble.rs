@@ -16,56 +16,13 @@
 use std::collections::VecDeque;
 use std::ops::ControlFlow;
 
+pub use bistable_core::{drive, LaneRun};
 use bistable_core::{
-    Batch, Classification, ClassifyOptions, ClassifyRun, Event, Instant, Params, SimError,
-    Simulator, Sinusoid, SolverOptions, Tracking, Width,
+    Batch, ClassifyOptions, ClassifyRun, Event, Params, SimError, Simulator, Sinusoid,
+    SolverOptions, Tracking, Width,
 };
 
 use crate::parallel::{self, Threads};
-
-/// A run taken one stretch at a time, so that a caller can drive its simulator itself (alone
-/// with [`drive`], or as one lane of a [`Batch`]).
-pub trait LaneRun {
-    /// What the run gives at its end.
-    type Result;
-
-    /// The instant to advance the simulator to next.
-    fn target(&self) -> Instant;
-
-    /// Takes an event of the simulator's advance to [`LaneRun::target`].
-    fn event(&mut self, e: &Event);
-
-    /// Takes the simulator at [`LaneRun::target`]: the result when the run is over, `None`
-    /// when it goes on to the next target.
-    fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Self::Result>, SimError>;
-}
-
-impl LaneRun for ClassifyRun {
-    type Result = Classification;
-
-    fn target(&self) -> Instant {
-        ClassifyRun::target(self)
-    }
-
-    fn event(&mut self, e: &Event) {
-        ClassifyRun::event(self, e);
-    }
-
-    fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Classification>, SimError> {
-        ClassifyRun::reached(self, sim)
-    }
-}
-
-/// Advances `sim` from target to target of `run` until it gives its result.
-pub fn drive<R: LaneRun>(run: &mut R, sim: &mut Simulator) -> Result<R::Result, SimError> {
-    loop {
-        let target = run.target();
-        sim.advance_instant(target, &mut |e: &Event| run.event(e))?;
-        if let Some(r) = run.reached(sim)? {
-            return Ok(r);
-        }
-    }
-}
 
 /// A run to make: what starts it, and the setting it shares a batch with other runs by.
 pub trait RunSpec {

@@ -15,6 +15,7 @@
 use std::collections::VecDeque;
 
 use crate::events::{ContactMode, Event, Well};
+use crate::lane_run::{drive, LaneRun};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER_ENERGY};
 use crate::shaker::Sinusoid;
@@ -195,13 +196,7 @@ pub fn classify_from(
     track: Tracking,
 ) -> Result<Classification, SimError> {
     let (mut run, mut sim) = ClassifyRun::start(params, plate, opts, co, start, track)?;
-    loop {
-        let target = run.target();
-        sim.advance_instant(target, &mut |e: &Event| run.event(e))?;
-        if let Some(c) = run.reached(&mut sim)? {
-            return Ok(c);
-        }
-    }
+    drive(&mut run, &mut sim)
 }
 
 /// A classification run ([`classify_from`]) taken one stretch at a time, so that a caller can
@@ -463,6 +458,22 @@ impl ClassifyRun {
 
 /// Largest Lyapunov exponent (per unit of `τ`) above which an aperiodic response is chaotic.
 const CHAOS: f64 = 1e-3;
+
+impl LaneRun for ClassifyRun {
+    type Result = Classification;
+
+    fn target(&self) -> Instant {
+        ClassifyRun::target(self)
+    }
+
+    fn event(&mut self, e: &Event) {
+        ClassifyRun::event(self, e);
+    }
+
+    fn reached(&mut self, sim: &mut Simulator) -> Result<Option<Classification>, SimError> {
+        ClassifyRun::reached(self, sim)
+    }
+}
 
 /// Largest growth of the variational solution over any stretch of sections (the largest
 /// rise of its accumulated log-norm), until it reaches `cap`.

@@ -23,6 +23,7 @@ pub mod classify;
 pub mod codec;
 pub mod events;
 pub mod interrupt;
+pub mod lane_run;
 pub mod lanes;
 pub mod law;
 pub mod params;
@@ -45,6 +46,7 @@ pub use classify::{
     ResponseClass, Tracking,
 };
 pub use events::{ContactMode, Event, Impact, StickCause, Well};
+pub use lane_run::{drive, LaneRun};
 pub use lanes::Width;
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use ramp::SetpointRamp;
