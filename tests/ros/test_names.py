@@ -28,7 +28,13 @@ def test_two_rigs_in_one_domain_see_only_their_own_impacts():
     rig2 = NodeProcess(*RIG2, *common, domain=domain)
     try:
         done = lambda: all(got[n] and got[n][-1].t > 60.0 for n in ["/rig1/bistable/impacts", "/rig2/sim2/hits"])
-        assert peer.spin_until(done, 40), {n: len(v) for n, v in got.items()}
+        if not peer.spin_until(done, 40):
+            # Everything that tells discovery from the nodes apart: what the peer saw and the nodes' logs.
+            seen = {n: len(v) for n, v in {**got, **clocks}.items()}
+            graph = (peer.node.get_node_names_and_namespaces(), sorted(dict(peer.node.get_topic_names_and_types())))
+            logs = [p.stop()[-4000:] for p in (rig1, rig2)]
+            raise AssertionError(f"no impacts to t = 60 within 40 s: received {seen}; graph {graph}; "
+                                 f"rig1 log:\n{logs[0]}\nrig2 log:\n{logs[1]}")
         names = peer.node.get_node_names_and_namespaces()
         assert ("bistable_impact", "/rig1") in names and ("sim2", "/rig2") in names, names
         topics = dict(peer.node.get_topic_names_and_types())
