@@ -6,7 +6,9 @@
 //! sinusoid, away from the plate, get it from one pass of the lane kernel: plate series, flight
 //! series (with the variational series when a lane integrates them), step size, the gap's cheap
 //! root certificates, the barrier bound and the state at the step's end, for all lanes at once
-//! ([`crate::lanes`]: the same operations in the same order as the scalar step, lane by lane).
+//! ([`crate::lanes`]: the same operations in the same order as the scalar step, lane by lane),
+//! unless too few lanes need one for a pass to pay (one of 4, up to two of 8): those take the
+//! lone simulator's step.
 //! What the kernel leaves open — a root to isolate, the barrier within reach, a non-finite
 //! series — and every other step (riding on the plate, the steps right after an impact or a
 //! release) is done by the lane's own simulator exactly as it would alone, as is everything
@@ -248,7 +250,20 @@ impl Batch {
                     }
                 }
             }
-            if starts.is_empty() {
+            // Too few lanes for a pass of the kernel, which costs more for one lane than the
+            // lone simulator's step: each takes that step instead (the same step, bit for bit).
+            if starts.len() < width.min_kernel_lanes() {
+                for &(lane, _) in starts.iter() {
+                    let slot = slots[lane].as_mut().expect("occupied");
+                    let mut tag = Tagged { lane, inner: obs };
+                    match slot.sim.compute_step() {
+                        Ok(()) => slot.sim.step_ready(&mut tag),
+                        Err(e) => {
+                            slot.running = false;
+                            stopped.push((lane, Err(e)));
+                        }
+                    }
+                }
                 continue;
             }
             for &(lane, _) in starts.iter() {

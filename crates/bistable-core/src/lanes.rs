@@ -325,6 +325,18 @@ impl Width {
         }
     }
 
+    /// The fewest lanes needing a free step for which a batch runs its kernel; fewer take the
+    /// lone simulator's step. A pass costs about 1.5 lone steps with 4 lanes and 3 with 8
+    /// whatever the number of lanes it carries (one trajectory alone in a batch, on the
+    /// Zen 4 machine of `docs/benchmarks.md`).
+    pub(crate) fn min_kernel_lanes(self) -> usize {
+        match self {
+            Width::One => usize::MAX,
+            Width::Four => 2,
+            Width::Eight => 3,
+        }
+    }
+
     /// Lanes: 1, 4 or 8.
     pub fn lanes(self) -> usize {
         match self {
