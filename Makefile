@@ -28,6 +28,7 @@ build: setup
 lint: setup
 	$(CARGO) fmt --all -- --check
 	$(CARGO) clippy --workspace --all-targets -- -D warnings
+	RUSTDOCFLAGS="-D warnings" $(CARGO) doc --no-deps --workspace --quiet
 
 ## Every test: formatting, lints, Rust unit/integration/doc tests, and the components' suites.
 test: lint

@@ -1,6 +1,6 @@
 //! The FMI 3.0 functions with C linkage: common, Model Exchange and co-simulation (with event mode
 //! and early return). They drive the same [`Instance`] as the FMI 2.0 functions (`exports.rs`),
-//! whose argument checks and panic guard ([`call`]) they share; an instance made by one version's
+//! whose argument checks and panic guard (`call`) they share; an instance made by one version's
 //! functions is refused by the other's.
 //!
 //! Co-simulation with `earlyReturnAllowed`: `fmi3DoStep` stops at the first impact, start or end

@@ -618,7 +618,7 @@ impl Instance {
 
     /// Sets the variables `vrs` to `vals` converted by `conv`, written as `ty` (all or none). A
     /// value equal to the one held changes nothing; a changed one makes stale only the computed
-    /// values that depend on it now (see [`Instance::affects_outputs`]).
+    /// values that depend on it now (see `Instance::affects_outputs`).
     pub fn set_from<T: Copy>(
         &mut self,
         vrs: &[fmi2ValueReference],

@@ -303,7 +303,7 @@ pub fn covers(trace: &[ArcPoint], omega: f64, x: f64, v: f64, tol: f64) -> bool 
 /// point; `models[seed.point]` is its model) not already on a trace, in both directions (two
 /// threads), joined into one polyline each (decreasing-Ω part reversed, so each trace starts
 /// at its low-Ω end unless it turns). A trace ends where it runs onto an earlier one (at the
-/// first orbit within [`COVERED`] of it). Traces of a single point are dropped.
+/// first orbit within `COVERED` (5e-3) of it). Traces of a single point are dropped.
 pub fn traces(
     models: &[Model],
     found: &[(Seed, Orbit)],

@@ -155,7 +155,7 @@ impl SetpointRamp {
         self.target.phase_cycles(t)
     }
 
-    /// The shaker phase [cycles] of an impact: the core's (the plate was a sinusoid) or, for
+    /// The shaker phase \[cycles\] of an impact: the core's (the plate was a sinusoid) or, for
     /// an impact on the ramp's pieces (the core gives none), the ramp's.
     pub fn impact_phase(&self, i: &Impact) -> Option<f64> {
         let on_ramp = i.t >= self.start.to_f64() && i.t <= self.knot(self.pieces);

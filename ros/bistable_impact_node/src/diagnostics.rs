@@ -35,7 +35,7 @@ pub struct Counters {
     pub window_lateness: Duration,
     /// Paced ticks more than [`LATE_TICK`] late.
     pub late_ticks: u64,
-    /// Simulation time advanced [s] (resets do not count back).
+    /// Simulation time advanced \[s\] (resets do not count back).
     pub advanced: f64,
     /// Resets done.
     pub resets: u64,
@@ -71,7 +71,7 @@ impl DiagnosticsClock {
     }
 
     /// If a report is due at `now`: the real-time factor achieved since the last one
-    /// (simulation time `advanced` [s] in all, over the wall time in between; 0 for no wall
+    /// (simulation time `advanced` \[s\] in all, over the wall time in between; 0 for no wall
     /// time), and the next report is scheduled one [`PERIOD`] later.
     pub fn due(&mut self, now: Instant, advanced: f64) -> Option<f64> {
         if now < self.next {

@@ -7,9 +7,9 @@ use serde::{Deserialize, Serialize};
 /// `builtin_interfaces/Time`: seconds and nanoseconds.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, PartialOrd, Ord, Serialize, Deserialize)]
 pub struct Time {
-    /// Whole seconds [s].
+    /// Whole seconds \[s\].
     pub sec: i32,
-    /// Nanoseconds, `0..1_000_000_000` [ns].
+    /// Nanoseconds, `0..1_000_000_000` \[ns\].
     pub nanosec: u32,
 }
 
@@ -72,15 +72,15 @@ pub struct Clock {
 pub struct MassState {
     /// Stamp = simulation time; frame = `frame_id` parameter.
     pub header: Header,
-    /// Simulation time [s].
+    /// Simulation time \[s\].
     pub t: f64,
-    /// Mass position [m].
+    /// Mass position \[m\].
     pub x: f64,
-    /// Mass velocity [m/s].
+    /// Mass velocity \[m/s\].
     pub v: f64,
-    /// Plate position [m].
+    /// Plate position \[m\].
     pub z: f64,
-    /// Plate velocity [m/s].
+    /// Plate velocity \[m/s\].
     pub zdot: f64,
     /// Kinetic energy per unit mass [J/kg].
     pub kinetic_energy: f64,
@@ -94,9 +94,9 @@ pub struct MassState {
     pub impact_count: u64,
     /// [`ShakerCommand::MODE_SINUSOID`] or [`ShakerCommand::MODE_EXTERNAL`].
     pub shaker_mode: u8,
-    /// Sinusoid angular frequency [rad/s] (NaN in external mode).
+    /// Sinusoid angular frequency \[rad/s\] (NaN in external mode).
     pub shaker_omega: f64,
-    /// Sinusoid velocity amplitude [m/s] (NaN in external mode).
+    /// Sinusoid velocity amplitude \[m/s\] (NaN in external mode).
     pub shaker_velocity: f64,
 }
 
@@ -107,17 +107,17 @@ pub struct ImpactEvent {
     pub header: Header,
     /// Running number from 0.
     pub index: u64,
-    /// Impact time [s].
+    /// Impact time \[s\].
     pub t: f64,
-    /// Shaker phase [cycles] (NaN for external plate motion).
+    /// Shaker phase \[cycles\] (NaN for external plate motion).
     pub phase: f64,
-    /// Position [m].
+    /// Position \[m\].
     pub x: f64,
-    /// Mass velocity before [m/s].
+    /// Mass velocity before \[m/s\].
     pub v_before: f64,
-    /// Mass velocity after [m/s].
+    /// Mass velocity after \[m/s\].
     pub v_after: f64,
-    /// Plate velocity [m/s].
+    /// Plate velocity \[m/s\].
     pub zdot: f64,
     /// Specific kinetic energy change [J/kg].
     pub delta_k: f64,
@@ -132,13 +132,13 @@ pub struct ShakerCommand {
     pub header: Header,
     /// [`Self::MODE_SINUSOID`] or [`Self::MODE_EXTERNAL`].
     pub mode: u8,
-    /// Sinusoid angular frequency [rad/s].
+    /// Sinusoid angular frequency \[rad/s\].
     pub omega: f64,
-    /// Sinusoid velocity amplitude [m/s].
+    /// Sinusoid velocity amplitude \[m/s\].
     pub velocity: f64,
-    /// External plate position [m].
+    /// External plate position \[m\].
     pub z: f64,
-    /// External plate velocity [m/s].
+    /// External plate velocity \[m/s\].
     pub zdot: f64,
 }
 
@@ -196,7 +196,7 @@ pub struct StepResponse {
     pub success: bool,
     /// What was done, or why not.
     pub message: String,
-    /// Simulation time after the step [s].
+    /// Simulation time after the step \[s\].
     pub t: f64,
     /// Impacts located so far.
     pub impact_count: u64,
@@ -205,9 +205,9 @@ pub struct StepResponse {
 /// `bistable_impact_msgs/srv/ResetState` request (see `srv/ResetState.srv`).
 #[derive(Debug, Clone, Default, PartialEq, Serialize, Deserialize)]
 pub struct ResetStateRequest {
-    /// Mass position [m].
+    /// Mass position \[m\].
     pub x: f64,
-    /// Mass velocity [m/s].
+    /// Mass velocity \[m/s\].
     pub v: f64,
 }
 

@@ -10,7 +10,7 @@ pub const MAX_BEHIND: f64 = 1.0;
 pub const LATE_TICK: Duration = Duration::from_millis(10);
 
 /// Keeps simulation time at `real_time_factor` times wall-clock time: simulation time `sim`
-/// [s] is due at wall instant `wall`, and `t` at `wall + (t − sim)/rtf`.
+/// \[s\] is due at wall instant `wall`, and `t` at `wall + (t − sim)/rtf`.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Pacer {
     rtf: f64,
@@ -19,12 +19,12 @@ pub struct Pacer {
 }
 
 impl Pacer {
-    /// A schedule on which simulation time `sim` [s] is due now.
+    /// A schedule on which simulation time `sim` \[s\] is due now.
     pub fn new(rtf: f64, sim: f64) -> Self {
         Self::starting_at(rtf, sim, Instant::now())
     }
 
-    /// A schedule on which simulation time `sim` [s] is due at `wall`.
+    /// A schedule on which simulation time `sim` \[s\] is due at `wall`.
     pub fn starting_at(rtf: f64, sim: f64, wall: Instant) -> Self {
         Self { rtf, wall, sim }
     }
@@ -39,7 +39,7 @@ impl Pacer {
         self.due_at(t, Instant::now())
     }
 
-    /// The wall-clock instant at which simulation time `t` [s] is due, `now` being the present;
+    /// The wall-clock instant at which simulation time `t` \[s\] is due, `now` being the present;
     /// `None` when `rtf` is 0 or less (as fast as possible), or when `now` is more than
     /// [`MAX_BEHIND`] past it or it is not finite (then the schedule restarts: `t` is due `now`).
     pub fn due_at(&mut self, t: f64, now: Instant) -> Option<Instant> {

@@ -90,9 +90,9 @@ pub struct Settings {
     pub zeta: f64,
     /// e [-].
     pub e: f64,
-    /// ω0 [rad/s].
+    /// ω0 \[rad/s\].
     pub omega0: f64,
-    /// Δx [m].
+    /// Δx \[m\].
     pub delta_x: f64,
     /// Initial Ω [-].
     pub omega: f64,
@@ -127,7 +127,7 @@ impl Default for Settings {
     }
 }
 
-/// Largest accepted `publish_rate` [Hz].
+/// Largest accepted `publish_rate` \[Hz\].
 pub const MAX_PUBLISH_RATE: f64 = 1e6;
 
 impl Settings {

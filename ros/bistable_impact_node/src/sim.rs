@@ -148,7 +148,7 @@ impl Runner {
         })
     }
 
-    /// Restarts the simulation at time 0 with the mass at `x` [m] moving at `v` [m/s] (the
+    /// Restarts the simulation at time 0 with the mass at `x` \[m\] moving at `v` \[m/s\] (the
     /// paper's initial condition, `x = v = 0`, when `state` is `None`), the initial shaker
     /// sinusoid (`Omega`, `V` of `settings`) and the current `zeta`, `e`: impact indices restart
     /// at 0, queued commands and any ramp or external motion are discarded, ticks restart at 0.
@@ -211,7 +211,7 @@ impl Runner {
         ))
     }
 
-    /// Current simulation time [s].
+    /// Current simulation time \[s\].
     pub fn now(&self) -> f64 {
         self.sim.time() / self.omega0
     }
@@ -381,7 +381,7 @@ impl Runner {
         })
     }
 
-    /// The instant from which a new command can act [s], and whether the plate follows
+    /// The instant from which a new command can act \[s\], and whether the plate follows
     /// external samples there.
     fn frontier(&self) -> (f64, bool) {
         let mut frontier = self.now();

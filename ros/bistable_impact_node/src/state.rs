@@ -88,7 +88,7 @@ impl<Id> LoopState<Id> {
         }
     }
 
-    /// The `reset` (`state` `None`) and `reset_state` (`Some((x [m], v [m/s]))`) requests:
+    /// The `reset` (`state` `None`) and `reset_state` (`Some((x \[m\], v \[m/s\]))`) requests:
     /// restarts the simulation at t = 0 (see [`Runner::reset`]) and its pacing, queues the held
     /// back impact, and hands a step in progress to `aborted` (to be answered) first. Returns
     /// the success and the message of the response (logged; a refusal counted).
@@ -132,7 +132,7 @@ mod tests {
         LoopState::new(Runner::new(&settings).unwrap(), settings)
     }
 
-    /// Advances to the first tick after `t` [s].
+    /// Advances to the first tick after `t` \[s\].
     fn run_to(st: &mut LoopState<u32>, t: f64) {
         let mut impacts = Vec::new();
         while st.runner.now() < t {

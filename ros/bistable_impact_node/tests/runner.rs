@@ -15,7 +15,7 @@ fn settings(omega: f64, v: f64, rate: f64) -> Settings {
     }
 }
 
-/// Runs until simulation time `t_end` [s], returning the impacts and the tick times.
+/// Runs until simulation time `t_end` \[s\], returning the impacts and the tick times.
 fn run_until(r: &mut Runner, t_end: f64) -> (Vec<ImpactEvent>, Vec<f64>) {
     let (mut impacts, mut ticks) = (Vec::new(), Vec::new());
     while r.now() < t_end {
