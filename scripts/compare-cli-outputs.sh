@@ -68,6 +68,13 @@ record() { # BIN DIR
       --arclength --out orbit/arc.csv --plot orbit/arc.png --threads 1
     run orbit_folds orbit --continue-omega 0.8:2.0:31 --velocity 0.03 --settle 500 \
       --arclength --out orbit/folds.csv --threads 1 --json
+    run basins basins --omega 1.45 --velocity 0.05 --x-range 0.1:1.3:12 --v-range -0.5:0.5:10 \
+      --max-periods 2000 --uncertainty-samples 40 --out basins/basins.csv --plot basins/basins.png \
+      --threads 1 --json
+    run basins_resume basins --omega 1.45 --velocity 0.05 --x-range 0.1:1.3:12 --v-range -0.5:0.5:10 \
+      --max-periods 2000 --uncertainty-samples 40 --out basins/basins.csv --threads 1 --json
+    run bad_basins_start basins --omega 1.45 --velocity 0.05 --x-range -0.5:0.5:3 --v-range 0:0.1:2 \
+      --out x.csv
     run thresholds thresholds
     run thresholds_json thresholds --restitution 0.7 --omega 0.3 --json
     run energy_map energy-map --plot em/plain.png
