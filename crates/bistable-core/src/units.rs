@@ -54,6 +54,11 @@ impl Scale {
         omega * self.omega0
     }
 
+    /// Nondimensional `Ω` of the angular frequency `omega` (rad/s).
+    pub fn of_frequency(&self, omega: f64) -> f64 {
+        omega / self.omega0
+    }
+
     /// Acceleration (m/s²).
     pub fn acceleration(&self, a: f64) -> f64 {
         a * (self.omega0 * self.omega0 * self.dx)

@@ -93,8 +93,8 @@ pub enum Outcome {
 /// The simulation with its publish schedule and command queue.
 pub struct Runner {
     sim: Simulator,
-    omega0: f64,
-    delta_x: f64,
+    /// `omega0` and `delta_x`; energies are published per unit mass (no mass: NaN).
+    scale: Scale,
     frame_id: String,
     rate: f64,
     tick_origin: f64,
@@ -130,8 +130,11 @@ impl Runner {
         let sim = Simulator::new(params, plate.into(), opts).map_err(|e| e.to_string())?;
         Ok(Self {
             sim,
-            omega0: settings.omega0,
-            delta_x: settings.delta_x,
+            scale: Scale {
+                omega0: settings.omega0,
+                dx: settings.delta_x,
+                mass: f64::NAN,
+            },
             frame_id: settings.frame_id.clone(),
             rate: settings.publish_rate,
             tick_origin: 0.0,
@@ -167,8 +170,7 @@ impl Runner {
                 return Err(format!("{name} = {} is not finite", num(value)));
             }
         }
-        let xn = x / self.delta_x;
-        let vn = v / (self.omega0 * self.delta_x);
+        let (xn, vn) = (self.scale.of_length(x), self.scale.of_velocity(v));
         if xn.abs() > MAX_NONDIMENSIONAL || vn.abs() > MAX_NONDIMENSIONAL {
             return Err(format!(
                 "x = {} m or v = {} m/s is out of range (at most {MAX_NONDIMENSIONAL:e} delta_x \
@@ -185,7 +187,7 @@ impl Runner {
             return Err(format!(
                 "x = {} m is below the plate, which is at z = {} m at time 0",
                 num(x),
-                num(self.delta_x * z0)
+                num(self.scale.length(z0))
             ));
         }
         let sim = Simulator::with_state(params, motion, SolverOptions::default(), 0.0, xn, vn)
@@ -213,7 +215,7 @@ impl Runner {
 
     /// Current simulation time \[s\].
     pub fn now(&self) -> f64 {
-        self.sim.time() / self.omega0
+        self.scale.time(self.sim.time())
     }
 
     /// Impacts located so far.
@@ -292,8 +294,8 @@ impl Runner {
         let item = match cmd.mode {
             ShakerCommand::MODE_SINUSOID => {
                 unused_zero(&[("z", cmd.z), ("zdot", cmd.zdot)], "MODE_SINUSOID")?;
-                let omega = cmd.omega / self.omega0;
-                let v = cmd.velocity / (self.omega0 * self.delta_x);
+                let omega = self.scale.of_frequency(cmd.omega);
+                let v = self.scale.of_velocity(cmd.velocity);
                 if !(cmd.omega > 0.0 && omega > 0.0 && omega <= MAX_NONDIMENSIONAL) {
                     return Err(format!(
                         "omega = {} rad/s must be > 0 and at most {MAX_NONDIMENSIONAL:e}·omega0",
@@ -329,8 +331,8 @@ impl Runner {
                     &[("omega", cmd.omega), ("velocity", cmd.velocity)],
                     "MODE_EXTERNAL",
                 )?;
-                let z = cmd.z / self.delta_x;
-                let zd = cmd.zdot / (self.omega0 * self.delta_x);
+                let z = self.scale.of_length(cmd.z);
+                let zd = self.scale.of_velocity(cmd.zdot);
                 if z.abs() > MAX_NONDIMENSIONAL || zd.abs() > MAX_NONDIMENSIONAL {
                     return Err(format!(
                         "z = {} m or zdot = {} m/s is out of range (at most {MAX_NONDIMENSIONAL:e} \
@@ -344,7 +346,7 @@ impl Runner {
                 } else {
                     stamp.to_seconds()
                 };
-                if self.omega0 * end <= self.omega0 * frontier {
+                if self.scale.tau(end) <= self.scale.tau(frontier) {
                     return Err(format!(
                         "sample time {end} s is not after {frontier} s (the current simulation \
                          time or the end of the queued commands)"
@@ -400,7 +402,7 @@ impl Runner {
     /// Applies the queued commands whose instant has come.
     fn apply_due(&mut self) {
         while let Some(&item) = self.queue.front() {
-            if self.omega0 * item.start() > self.sim.time() {
+            if self.scale.tau(item.start()) > self.sim.time() {
                 break;
             }
             self.queue.pop_front();
@@ -413,7 +415,7 @@ impl Runner {
                             self.ramp = Some(ramp);
                             format!(
                                 "shaker sinusoid ramp from t = {t} s to t = {} s",
-                                ramp.end().to_f64() / self.omega0
+                                self.scale.time(ramp.end().to_f64())
                             )
                         },
                     )
@@ -442,7 +444,7 @@ impl Runner {
         let now = self.sim.state();
         let piece = PolyPiece::hermite(
             self.sim.instant(),
-            Instant::new(self.omega0 * end),
+            Instant::new(self.scale.tau(end)),
             (now.z, now.zdot),
             (z, zd),
         )?;
@@ -469,10 +471,10 @@ impl Runner {
             return Outcome::Halted;
         }
         let now = self.sim.time();
-        let mut target = self.omega0 * self.next_tick();
+        let mut target = self.scale.tau(self.next_tick());
         let mut outcome = Outcome::Tick;
         if let Some(item) = self.queue.front() {
-            let start = self.omega0 * item.start();
+            let start = self.scale.tau(item.start());
             if start < target {
                 target = start;
                 outcome = Outcome::Command;
@@ -545,17 +547,8 @@ impl Runner {
         }
     }
 
-    /// The SI scales (the node publishes energies per unit mass: no mass).
-    fn scale(&self) -> Scale {
-        Scale {
-            omega0: self.omega0,
-            dx: self.delta_x,
-            mass: f64::NAN,
-        }
-    }
-
     fn impact_msg(&self, i: &Impact, ended_in_sticking: bool) -> ImpactEvent {
-        let sc = self.scale();
+        let sc = self.scale;
         let t = sc.time(i.t);
         ImpactEvent {
             header: self.header(t),
@@ -573,7 +566,7 @@ impl Runner {
 
     /// The state at the current time, in SI units.
     pub fn state(&self) -> MassState {
-        let sc = self.scale();
+        let sc = self.scale;
         let s = self.sim.state();
         let t = sc.time(s.t);
         // During a ramp: its target set-point.
