@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Ensembles in SIMD lanes against one trajectory at a time, each pair measured alternately in
 # one run on this machine (docs/benchmarks.md, "Ensembles"):
-#   1. trajectory-steps per second of lone simulators and of batches of 4 and 8 lanes, on one
+#   1. trajectory-steps per second (thread CPU time) of lone simulators and of batches of 4 and 8 lanes, on one
 #      core: aperiodic runs of the map and free flights (crates/bistable-core/examples/
 #      batch_throughput.rs);
 #   2. heyoka's batch mode against its scalar mode on the free flight (bench/heyoka_batch.py;
