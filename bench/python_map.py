@@ -83,7 +83,8 @@ def main() -> int:
     p.add_argument("--velocity-range", default="0.001:0.2:40")
     p.add_argument("--rounds", type=int, default=2)
     p.add_argument("--calls", type=int, default=2000)
-    p.add_argument("--chunk", type=int, default=16)
+    p.add_argument("--chunk", type=int, default=None,
+                   help="points per Dask task (default: sweep.map's choice)")
     p.add_argument("--no-map", action="store_true", help="only the simulate() overhead")
     p.add_argument("--methods", default="cli,dask,local",
                    help="which maps to time (comma-separated; cli is always run, as reference)")
@@ -168,7 +169,7 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|")
     names = {
         "cli": "`bistable map --threads 2`",
-        "dask": f"`sweep.map(client=...)`, LocalCluster 2 processes × 1 thread, chunk {a.chunk}",
+        "dask": f"`sweep.map(client=...)`, LocalCluster 2 processes × 1 thread, chunk {a.chunk or 'auto'}",
         "local": "`sweep.map(threads=2)` (Rust threads in-process)",
     }
     for k in methods:

@@ -222,6 +222,25 @@ def test_sweep_map_on_a_dask_client_equals_the_cli(cli_grid):
         assert got == expected, (row["omega"], row["velocity"])
 
 
+def test_dask_tasks_are_cut_for_about_eight_per_worker_thread():
+    """chunk=None: 16 to 256 points per task, about 8 tasks per worker thread of the client;
+    the tasks hold every point once, in order; an explicit chunk is kept."""
+    from bistable_impact import _check
+
+    class Client:  # what dask.distributed.Client.nthreads() reports: threads per worker
+        def nthreads(self):
+            return {"tcp://a": 1, "tcp://b": 1}
+
+    points = list(range(2400))
+    parts = _check.tasks(points, None, Client())
+    assert [len(p) for p in parts] == [150] * 16 and sum(parts, []) == points
+    assert {len(p) for p in _check.tasks(list(range(60000)), None, Client())[:-1]} == {256}
+    assert [len(p) for p in _check.tasks(list(range(40)), None, Client())] == [16, 16, 8]
+    assert [len(p) for p in _check.tasks(points[:20], 7, Client())] == [7, 7, 6]
+    # A client-like object that cannot say how many threads it has counts as one.
+    assert len(_check.tasks(list(range(800)), None, object())[0]) == 100
+
+
 def test_sweep_map_arguments():
     with pytest.raises(ValueError, match="'chunk'"):
         bi.sweep.map([1.0], [0.1], chunk=0)

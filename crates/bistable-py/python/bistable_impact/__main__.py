@@ -41,7 +41,8 @@ def main(argv: Optional[List[str]] = None) -> int:
     m.add_argument("--scheduler", metavar="ADDRESS", help="dask.distributed scheduler address")
     m.add_argument("--out", metavar="FILE.csv", help="map CSV (kept results are reused)")
     m.add_argument("--threads", type=int, default=0, help="local Rust threads (0: all cores)")
-    m.add_argument("--chunk", type=int, default=16, help="points per Dask task")
+    m.add_argument("--chunk", type=int, default=None,
+                   help="points per Dask task (default: 16 to 256, about 8 tasks per worker thread)")
     m.add_argument("--progress", action="store_true", help="a progress line on stderr")
     m.add_argument("--zeta", type=float, default=0.02)
     m.add_argument("--restitution", type=float, default=0.85)

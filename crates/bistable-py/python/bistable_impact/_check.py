@@ -138,6 +138,32 @@ def client(value: Any) -> Any:
     return value
 
 
+#: Bounds of the points (or starts) per Dask task that ``chunk=None`` chooses.
+AUTO_CHUNK = (16, 256)
+
+
+def chunk(value: Any) -> Optional[int]:
+    """``None`` (chosen per sweep by :func:`tasks`) or the points per Dask task, ``[1, 1e7]``."""
+    return None if value is None else integer("chunk", value, 1, MAX_POINTS)
+
+
+def tasks(items: list, size: Optional[int], client: Any) -> list:
+    """``items`` cut into the Dask tasks of a sweep, ``size`` items each; ``size=None`` takes
+    as many as give every worker thread of ``client`` about 8 tasks, at least 16 and at most
+    256: each task classifies its items in SIMD lanes, which stay busy only while a task has
+    runs to give them (tasks of 16 map points cost 20 % more CPU than tasks of 128 on a 60 × 40
+    map, ``docs/benchmarks.md``), and the last tasks should still spread over the workers."""
+    if size is None:
+        nthreads = getattr(client, "nthreads", None)
+        try:
+            threads = max(1, sum(nthreads().values())) if callable(nthreads) else 1
+        except Exception:  # a client-like object without a scheduler's view of its workers
+            threads = 1
+        lo, hi = AUTO_CHUNK
+        size = max(lo, min(hi, -(-len(items) // (8 * threads))))
+    return [items[i : i + size] for i in range(0, len(items), size)]
+
+
 def path(name: str, value: Any) -> Optional[str]:
     """``None`` or a file path (``str`` or ``os.PathLike``; not a file descriptor)."""
     if value is None:

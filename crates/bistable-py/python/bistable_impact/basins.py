@@ -3,7 +3,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Sequence
+from typing import Any, Optional, Sequence
 
 from . import _check as check
 from . import _native
@@ -35,7 +35,7 @@ def _classify_starts(omega, velocity, phase, starts, options, client, chunk, thr
     _native.basin_cells(omega, velocity, phase, starts, check_only=True, **options)
     if client is None:
         return _native.basin_cells(omega, velocity, phase, starts, threads=threads, **options)
-    parts = [starts[i : i + chunk] for i in range(0, len(starts), chunk)]
+    parts = check.tasks(starts, chunk, client)
     futures = client.map(
         _cells_chunk,
         parts,
@@ -70,7 +70,7 @@ def _arguments(
     )
     where = (
         check.client(client),
-        check.integer("chunk", chunk, 1, check.MAX_POINTS),
+        check.chunk(chunk),
         check.threads(threads),
     )
     return shaker, options, where
@@ -83,7 +83,7 @@ def basins(
     v0: Sequence[float],
     phase: float = 0.0,
     client: Any = None,
-    chunk: int = 64,
+    chunk: Optional[int] = None,
     threads: int = 0,
     lanes: int = 4,
     zeta: float = 0.02,
@@ -107,7 +107,9 @@ def basins(
         x0, v0: the grid's start positions (not below the plate at ``phase``) and velocities
             (at most 1e7 starts in all).
         client: a ``dask.distributed`` Client: the starts go to its workers in tasks of
-            ``chunk`` starts (each on one thread); without it, ``threads`` Rust threads here.
+            ``chunk`` starts (each on one thread; ``None``: 16 to 256, about 8 tasks per
+            worker thread, as for :func:`bistable_impact.sweep.map`); without it, ``threads``
+            Rust threads here.
         lanes: trajectories each thread (or Dask task) advances together in SIMD lanes: 1, 4
             or 8 (the cells are the same for every width).
         Other arguments: as for ``bistable basins``.
@@ -138,7 +140,7 @@ def basin_uncertainty(
     phase: float = 0.0,
     samples: int = 400,
     client: Any = None,
-    chunk: int = 64,
+    chunk: Optional[int] = None,
     threads: int = 0,
     lanes: int = 4,
     zeta: float = 0.02,
