@@ -150,9 +150,8 @@ def chunk(value: Any) -> Optional[int]:
 def tasks(items: list, size: Optional[int], client: Any) -> list:
     """``items`` cut into the Dask tasks of a sweep, ``size`` items each; ``size=None`` takes
     as many as give every worker thread of ``client`` about 8 tasks, at least 16 and at most
-    256: each task classifies its items in SIMD lanes, which stay busy only while a task has
-    runs to give them (tasks of 16 map points cost 20 % more CPU than tasks of 128 on a 60 × 40
-    map, ``docs/benchmarks.md``), and the last tasks should still spread over the workers."""
+    256: few enough tasks that Dask's own work per task stays small, enough that the last ones
+    still spread over the workers."""
     if size is None:
         nthreads = getattr(client, "nthreads", None)
         try:

@@ -133,8 +133,7 @@ def map(
             error), so a crashed or interrupted sweep resumes with only the missing points;
             at the end it is rewritten with the whole grid.
         chunk: points per Dask task, ``[1, 1e7]``; ``None`` (the default) takes 16 to 256,
-            as many as give each worker thread about 8 tasks (small tasks leave the SIMD
-            lanes idle at their ends: tasks of 16 cost 20 % more CPU than tasks of 128).
+            as many as give each worker thread about 8 tasks.
         lanes: trajectories each thread (or Dask task) advances together in SIMD lanes: 1
             (one at a time), 4 or 8. The results are the same for every width; 4 is the
             fastest on the machines measured (``docs/benchmarks.md``).
