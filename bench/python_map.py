@@ -5,7 +5,9 @@
   on 2 local Rust threads, and through ``target/release/bistable map --threads 2``; rounds in
   alternating order, each result checked against the CLI's map (same class at every point);
   wall and CPU time (the CLI's from rusage of the child, the workers' from their
-  ``time.process_time``, plus this process's), since wall times on a loaded machine vary;
+  ``time.process_time``, plus this process's), since wall times on a loaded machine vary; and
+  what the idle cluster itself uses per wall second (event loops, heartbeats, profilers), which
+  a map pays for as long as it runs, so that a slow (loaded) round pays more of it;
 * the call overhead of ``simulate()`` for a 1-impact run (Ω = 1.75, V = 0.07, τ ≤ 1: only the
   impact at τ = 0): the time of the whole call against the run's own time inside Rust
   (``summary['wall_time_s']``).
@@ -86,6 +88,8 @@ def main() -> int:
     p.add_argument("--chunk", type=int, default=None,
                    help="points per Dask task (default: sweep.map's choice)")
     p.add_argument("--no-map", action="store_true", help="only the simulate() overhead")
+    p.add_argument("--idle-seconds", type=float, default=10.0,
+                   help="how long the idle cluster's own CPU use is measured")
     p.add_argument("--methods", default="cli,dask,local",
                    help="which maps to time (comma-separated; cli is always run, as reference)")
     a = p.parse_args()
@@ -105,6 +109,15 @@ def main() -> int:
     client = Client(cluster)
     client.run(lambda: __import__("bistable_impact"))  # import in the workers before timing
     startup = time.perf_counter() - t
+    # What the cluster costs doing nothing (event loops, heartbeats, the workers' profilers):
+    # CPU seconds of the workers and of this process (client and scheduler) per wall second.
+    idle = 0.0
+    if rounds and "dask" in methods:
+        before, c, t = client.run(time.process_time), time.process_time(), time.perf_counter()
+        time.sleep(a.idle_seconds)
+        after = client.run(time.process_time)
+        idle = (sum(after[k] - before[k] for k in before) + time.process_time() - c) / (
+            time.perf_counter() - t)
     mismatches = 0
     try:
         for r in range(rounds):
@@ -180,6 +193,12 @@ def main() -> int:
               f"{', '.join(f'{x:.2f}' for x in cpu[k])} | "
               f"{100 * (least / min(cpu['cli']) - 1):+.1f} % |")
     print(f"\nLocalCluster start-up (not in the times above): {startup:.2f} s.\n")
+    if "dask" in methods:
+        least = min(range(len(cpu["dask"])), key=lambda i: cpu["dask"][i])
+        work = cpu["dask"][least] - idle * times["dask"][least]
+        print(f"The idle cluster used {idle:.3f} CPU s per wall s ({a.idle_seconds:.0f} s measured "
+              f"before the rounds); the least-CPU Dask round less that over its wall time: "
+              f"{work:.2f} s, {100 * (work / min(cpu['cli']) - 1):+.1f} % against the CLI.\n")
     print_simulate(a.calls, calls, inside)
     return 0
 
