@@ -26,6 +26,7 @@
 pub mod arclength;
 pub mod basins;
 pub mod bifurcation;
+pub mod bifurcations;
 pub mod branches;
 pub mod continuation;
 pub mod cycles;

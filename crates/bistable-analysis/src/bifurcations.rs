@@ -1,0 +1,502 @@
+//! Bifurcation points on branches of periodic orbits continued in Ω at fixed V: every change
+//! between consecutive orbits of a branch is detected, located and classified.
+//!
+//! Between two consecutive orbits `a`, `b` of a branch (fixed points of the `p`-period map in
+//! `u = (x, x', Ω)`), the branch is parametrised by the distance `s` along the chord from `u_a`
+//! to `u_b`: the orbit at `s` solves the map's fixed-point equations in the plane through
+//! `u_a + s·t` normal to the chord direction `t` (the pseudo-arclength corrector), so the
+//! parametrisation holds through folds. Then:
+//!
+//! * **grazing** / **sticking**: when the impacts per period (or whether the mass sticks)
+//!   differ at `a` and `b`, bisection in `s` brackets the change to [`NONSMOOTH_TOL`] in `s`
+//!   (re-solving the orbit at each trial); the test functions below jump there, so they are
+//!   only used on the smooth pieces on either side of the bracket.
+//! * on each smooth piece, a sign change of a test function of the monodromy matrix `M` is
+//!   located by the Illinois variant of regula falsi in `s` to [`SMOOTH_TOL`]: **fold**
+//!   `det(M − I)` (a multiplier through +1), **period doubling** `det(M + I)` (through −1),
+//!   **Neimark–Sacker** `det M − 1` while the multipliers are a complex pair (their modulus
+//!   through 1; with damping or `e < 1`, `det M < 1` always, so this cannot occur in the
+//!   paper's model, but is checked all the same).
+//!
+//! A test function that changes sign twice between two orbits of the branch is not seen: the
+//! detection is as fine as the branch's points. On a branch of period `p > 1`, points whose
+//! orbit has a smaller period (where an arclength trace of `p`-periodic orbits runs onto the
+//! orbit it doubled from) are not reported: that orbit's own branch reports them.
+
+use bistable_core::shooting::eigenvalues;
+
+use crate::arclength::{correct, norm, period_map, ArcPoint};
+use crate::branches::Branches;
+use crate::orbit::Orbit;
+use crate::parallel::{self, Threads};
+use crate::progress::{OnProgress, Progress, Stage};
+use crate::Model;
+
+/// Bisection of a grazing or sticking change stops when its bracket is this short in `s`
+/// (Euclidean in `(x, x', Ω)`, so Ω is known at least this well).
+pub const NONSMOOTH_TOL: f64 = 1e-10;
+/// Regula falsi on a smooth test function stops when its bracket is this short in `s`.
+pub const SMOOTH_TOL: f64 = 1e-12;
+/// Most corrector solves spent on one root.
+const MAX_SOLVES: usize = 80;
+/// A `p`-periodic orbit whose section point `d | p` periods on is this close (max norm,
+/// relative to `max(1, |y|)`) has the smaller period `d`.
+const SMALLER_PERIOD: f64 = 1e-6;
+
+/// What changes at a bifurcation point.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Kind {
+    /// A Floquet multiplier passes through +1 (saddle-node, the branch turns in Ω).
+    Fold,
+    /// A multiplier passes through −1 (an orbit of twice the period is born).
+    PeriodDoubling,
+    /// A complex pair of multipliers crosses the unit circle (torus).
+    NeimarkSacker,
+    /// The impacts per period change: a flight's minimum gap reaches zero with zero relative
+    /// velocity.
+    Grazing,
+    /// The orbit starts or stops sticking to the plate.
+    Sticking,
+}
+
+impl Kind {
+    /// Every kind, in the order of the plots' legends.
+    pub const ALL: [Kind; 5] = [
+        Kind::Fold,
+        Kind::PeriodDoubling,
+        Kind::NeimarkSacker,
+        Kind::Grazing,
+        Kind::Sticking,
+    ];
+
+    /// The kind as one word: `fold`, `period_doubling`, `neimark_sacker`, `grazing`,
+    /// `sticking`.
+    pub fn name(self) -> &'static str {
+        match self {
+            Kind::Fold => "fold",
+            Kind::PeriodDoubling => "period_doubling",
+            Kind::NeimarkSacker => "neimark_sacker",
+            Kind::Grazing => "grazing",
+            Kind::Sticking => "sticking",
+        }
+    }
+
+    /// The test function of a smooth kind at multipliers `λ`: `det(M − I)`, `det(M + I)` or
+    /// `det M − 1` (`None` for the non-smooth kinds).
+    fn test(self, lambda: [(f64, f64); 2]) -> Option<f64> {
+        let tr = lambda[0].0 + lambda[1].0;
+        // λ1·λ2 is real for a real matrix.
+        let det = lambda[0].0 * lambda[1].0 - lambda[0].1 * lambda[1].1;
+        match self {
+            Kind::Fold => Some(1.0 - tr + det),
+            Kind::PeriodDoubling => Some(1.0 + tr + det),
+            Kind::NeimarkSacker => Some(det - 1.0),
+            Kind::Grazing | Kind::Sticking => None,
+        }
+    }
+}
+
+/// One orbit of a branch, as the locator sees it.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BranchPoint {
+    /// `Ω`.
+    pub omega: f64,
+    /// Fixed point `x` at plate phase 0 (units of `Δx`).
+    pub x0: f64,
+    /// Its velocity `x'` (units of `ω0·Δx`).
+    pub v0: f64,
+    /// Floquet multipliers `(re, im)`, largest modulus first.
+    pub multipliers: [(f64, f64); 2],
+    /// Impacts per orbit.
+    pub impacts: u64,
+    /// Whether the mass sticks on the orbit.
+    pub sticks: bool,
+}
+
+impl From<&ArcPoint> for BranchPoint {
+    fn from(a: &ArcPoint) -> Self {
+        Self {
+            omega: a.omega,
+            x0: a.x0,
+            v0: a.v0,
+            multipliers: a.multipliers,
+            impacts: a.impacts,
+            sticks: a.sticks,
+        }
+    }
+}
+
+impl From<&Orbit> for BranchPoint {
+    fn from(o: &Orbit) -> Self {
+        let p = &o.orbit;
+        Self {
+            omega: p.omega,
+            x0: p.x0,
+            v0: p.v0,
+            multipliers: p.multipliers,
+            impacts: p.impacts,
+            sticks: p.sticks,
+        }
+    }
+}
+
+impl BranchPoint {
+    fn u(&self) -> [f64; 3] {
+        [self.x0, self.v0, self.omega]
+    }
+}
+
+/// A located bifurcation point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct BifurcationPoint {
+    /// What changes.
+    pub kind: Kind,
+    /// `Ω` at the point.
+    pub omega: f64,
+    /// `V` of the branch.
+    pub velocity: f64,
+    /// Period of the branch's orbits in shaker periods.
+    pub period: u32,
+    /// Fixed point `x` at plate phase 0 of the orbit at the point (grazing, sticking: the
+    /// orbit at the end of the final bracket on the side of `before`).
+    pub x0: f64,
+    /// Its velocity `x'`.
+    pub v0: f64,
+    /// Floquet multipliers `(re, im)` of that orbit, largest modulus first.
+    pub multipliers: [(f64, f64); 2],
+    /// Bound on the error of `omega`: the Ω-width of the final bracket (smooth kinds: the
+    /// regula-falsi bracket, at most [`SMOOTH_TOL`] when it converged; grazing and sticking:
+    /// the bisection bracket, at most [`NONSMOOTH_TOL`]).
+    pub omega_error: f64,
+    /// Which branch of the caller's list the point is on.
+    pub branch: usize,
+    /// The point lies between orbits `index` and `index + 1` of that branch.
+    pub index: usize,
+    /// Impacts per period of the orbits on the side of orbit `index`.
+    pub impacts_before: u64,
+    /// ... and on the side of orbit `index + 1`.
+    pub impacts_after: u64,
+    /// Whether the orbits on the side of orbit `index` stick.
+    pub sticks_before: bool,
+    /// ... and on the side of orbit `index + 1`.
+    pub sticks_after: bool,
+}
+
+/// An orbit on the chord parametrisation: `s`, the corrected `u`, multipliers, impacts, sticks.
+#[derive(Debug, Clone, Copy)]
+struct Solved {
+    s: f64,
+    u: [f64; 3],
+    multipliers: [(f64, f64); 2],
+    impacts: u64,
+    sticks: bool,
+}
+
+impl Solved {
+    fn side(&self) -> (u64, bool) {
+        (self.impacts, self.sticks)
+    }
+}
+
+/// One interval of a branch, parametrised by the chord.
+struct Chord<'a> {
+    model: &'a Model,
+    period: u32,
+    start: [f64; 3],
+    t: [f64; 3],
+}
+
+impl Chord<'_> {
+    /// The orbit at distance `s` along the chord (`None`: the corrector failed).
+    fn at(&self, s: f64) -> Option<Solved> {
+        let pred = [0, 1, 2].map(|k| self.start[k] + s * self.t[k]);
+        let (u, e, _) = correct(self.model, self.period, pred, self.t)?;
+        Some(Solved {
+            s,
+            u,
+            multipliers: eigenvalues(e.m),
+            impacts: e.impacts,
+            sticks: e.sticks,
+        })
+    }
+
+    /// Bisects between `lo` and `hi` (different impacts or sticking) to [`NONSMOOTH_TOL`];
+    /// the final bracket, shorter only as far as the corrector converged.
+    fn bisect(&self, mut lo: Solved, mut hi: Solved) -> (Solved, Solved) {
+        for _ in 0..MAX_SOLVES {
+            if (hi.s - lo.s).abs() <= NONSMOOTH_TOL {
+                break;
+            }
+            let Some(mid) = self.at(0.5 * (lo.s + hi.s)) else {
+                break;
+            };
+            if mid.side() == lo.side() {
+                lo = mid;
+            } else {
+                hi = mid;
+            }
+        }
+        (lo, hi)
+    }
+
+    /// The root of `kind`'s test function between `lo` and `hi` (of opposite signs) by the
+    /// Illinois method: the last orbit solved and the Ω-width of the final bracket.
+    fn root(&self, kind: Kind, mut lo: Solved, mut hi: Solved) -> Option<(Solved, f64)> {
+        let f = |p: &Solved| kind.test(p.multipliers).unwrap_or(f64::NAN);
+        let (mut flo, mut fhi) = (f(&lo), f(&hi));
+        let mut best = if flo.abs() <= fhi.abs() { lo } else { hi };
+        // Which end was kept last (−1: lo, 1: hi), for the Illinois halving.
+        let mut kept = 0;
+        for _ in 0..MAX_SOLVES {
+            if (hi.s - lo.s).abs() <= SMOOTH_TOL {
+                break;
+            }
+            let mut s = (lo.s * fhi - hi.s * flo) / (fhi - flo);
+            if !(s.is_finite() && s > lo.s.min(hi.s) && s < lo.s.max(hi.s)) {
+                s = 0.5 * (lo.s + hi.s);
+            }
+            let p = self.at(s)?;
+            let fp = f(&p);
+            if !fp.is_finite() {
+                return None;
+            }
+            best = p;
+            if fp == 0.0 {
+                lo = p;
+                hi = p;
+                break;
+            }
+            if (fp < 0.0) == (flo < 0.0) {
+                lo = p;
+                flo = fp;
+                if kept == -1 {
+                    fhi *= 0.5;
+                }
+                kept = -1;
+            } else {
+                hi = p;
+                fhi = fp;
+                if kept == 1 {
+                    flo *= 0.5;
+                }
+                kept = 1;
+            }
+        }
+        Some((best, (hi.u[2] - lo.u[2]).abs()))
+    }
+}
+
+/// Whether a point on the way from `a` to `b` may hold a bifurcation: a change of impacts or
+/// sticking, or a sign change of a test function.
+fn changes(a: &BranchPoint, b: &BranchPoint) -> bool {
+    a.impacts != b.impacts
+        || a.sticks != b.sticks
+        || smooth_kinds(a.multipliers, b.multipliers).next().is_some()
+}
+
+/// The smooth kinds whose test functions have opposite signs at `la` and `lb`.
+fn smooth_kinds(la: [(f64, f64); 2], lb: [(f64, f64); 2]) -> impl Iterator<Item = Kind> {
+    [Kind::Fold, Kind::PeriodDoubling, Kind::NeimarkSacker]
+        .into_iter()
+        .filter(move |k| {
+            let (fa, fb) = (k.test(la), k.test(lb));
+            matches!((fa, fb), (Some(x), Some(y)) if x * y < 0.0)
+        })
+}
+
+/// Whether the `period`-periodic orbit at `u` has a smaller period.
+fn smaller_period(model: &Model, period: u32, u: [f64; 3]) -> bool {
+    let y = [u[0], u[1]];
+    let scale = y[0].abs().max(y[1].abs()).max(1.0);
+    (1..period).filter(|&d| period.is_multiple_of(d)).any(|d| {
+        match period_map(model, u[2], d, y, false) {
+            Ok((py, ..)) => (py[0] - y[0]).abs().max((py[1] - y[1]).abs()) < SMALLER_PERIOD * scale,
+            Err(_) => false,
+        }
+    })
+}
+
+/// The bifurcation points between the consecutive orbits `a` and `b` of a branch of
+/// `period`-periodic orbits at `model`'s V (`model`: any model of the branch; Ω comes from the
+/// orbits), in the order met from `a` to `b`. `branch` and `index` label them.
+pub fn between(
+    model: &Model,
+    period: u32,
+    a: &BranchPoint,
+    b: &BranchPoint,
+    branch: usize,
+    index: usize,
+) -> Vec<BifurcationPoint> {
+    let (ua, ub) = (a.u(), b.u());
+    let d = [ub[0] - ua[0], ub[1] - ua[1], ub[2] - ua[2]];
+    let len = norm(d);
+    if !(len.is_finite() && len > 0.0) || !changes(a, b) {
+        return Vec::new();
+    }
+    let chord = Chord {
+        model,
+        period,
+        start: ua,
+        t: d.map(|c| c / len),
+    };
+    let end = |p: &BranchPoint, s: f64| Solved {
+        s,
+        u: p.u(),
+        multipliers: p.multipliers,
+        impacts: p.impacts,
+        sticks: p.sticks,
+    };
+    let (sa, sb) = (end(a, 0.0), end(b, len));
+    let point =
+        |kind: Kind, at: &Solved, err: f64, before: &Solved, after: &Solved| BifurcationPoint {
+            kind,
+            omega: at.u[2],
+            velocity: model.velocity(),
+            period,
+            x0: at.u[0],
+            v0: at.u[1],
+            multipliers: at.multipliers,
+            omega_error: err,
+            branch,
+            index,
+            impacts_before: before.impacts,
+            impacts_after: after.impacts,
+            sticks_before: before.sticks,
+            sticks_after: after.sticks,
+        };
+    // The smooth pieces, and the non-smooth change between them.
+    let mut pieces = vec![(sa, sb)];
+    let mut out = Vec::new();
+    if sa.side() != sb.side() {
+        let (lo, hi) = chord.bisect(sa, sb);
+        let kind = if lo.sticks != hi.sticks {
+            Kind::Sticking
+        } else {
+            Kind::Grazing
+        };
+        let mid = Solved {
+            u: [0, 1, 2].map(|k| 0.5 * (lo.u[k] + hi.u[k])),
+            ..lo
+        };
+        let mut p = point(kind, &lo, (hi.u[2] - lo.u[2]).abs(), &lo, &hi);
+        p.omega = mid.u[2];
+        out.push((mid.s, p));
+        pieces = vec![(sa, lo), (hi, sb)];
+    }
+    for (lo, hi) in pieces {
+        if lo.side() != hi.side() {
+            continue;
+        }
+        for kind in smooth_kinds(lo.multipliers, hi.multipliers) {
+            let Some((at, err)) = chord.root(kind, lo, hi) else {
+                continue;
+            };
+            // The modulus of a real pair through 1 is no Neimark–Sacker bifurcation.
+            if kind == Kind::NeimarkSacker && at.multipliers[0].1 == 0.0 {
+                continue;
+            }
+            out.push((at.s, point(kind, &at, err, &sa, &sb)));
+        }
+    }
+    out.retain(|(_, p)| period == 1 || !smaller_period(model, period, [p.x0, p.v0, p.omega]));
+    out.sort_by(|x, y| x.0.total_cmp(&y.0));
+    out.into_iter().map(|(_, p)| p).collect()
+}
+
+/// One branch to search: a model at its V, its period and its orbits in order along it.
+#[derive(Debug, Clone)]
+pub struct Branch {
+    /// Any model at the branch's V (Ω comes from the orbits).
+    pub model: Model,
+    /// Period in shaker periods.
+    pub period: u32,
+    /// The orbits in order along the branch.
+    pub points: Vec<BranchPoint>,
+}
+
+impl Branch {
+    /// The polylines of natural continuation `b` over the grid `models` (one V), one branch
+    /// each (orbits by increasing Ω).
+    pub fn from_natural(models: &[Model], b: &Branches) -> Vec<Branch> {
+        b.paths()
+            .into_iter()
+            .map(|path| Branch {
+                model: models[path[0].0],
+                period: b.period,
+                points: path.iter().map(|&n| b.orbit(n).into()).collect(),
+            })
+            .collect()
+    }
+
+    /// The pseudo-arclength `traces` of `period`-periodic orbits at `model`'s V, one branch
+    /// each.
+    pub fn from_traces(model: &Model, period: u32, traces: &[Vec<ArcPoint>]) -> Vec<Branch> {
+        traces
+            .iter()
+            .map(|t| Branch {
+                model: *model,
+                period,
+                points: t.iter().map(BranchPoint::from).collect(),
+            })
+            .collect()
+    }
+}
+
+/// Locates every bifurcation point on `branches` (the intervals with a change, in parallel on
+/// `threads`), ordered by branch and position along it. Reports [`Stage::Locating`] progress;
+/// an error of `progress` cancels.
+pub fn locate<E>(
+    branches: &[Branch],
+    threads: Threads,
+    progress: &mut OnProgress<'_, E>,
+) -> Result<Vec<BifurcationPoint>, E> {
+    let items: Vec<(usize, usize)> = branches
+        .iter()
+        .enumerate()
+        .flat_map(|(k, b)| {
+            b.points
+                .windows(2)
+                .enumerate()
+                .filter(|(_, w)| changes(&w[0], &w[1]))
+                .map(move |(i, _)| (k, i))
+        })
+        .collect();
+    let total = items.len();
+    let found = parallel::map(
+        &items,
+        threads,
+        |&(k, i)| {
+            let b = &branches[k];
+            between(&b.model, b.period, &b.points[i], &b.points[i + 1], k, i)
+        },
+        |done| {
+            progress(Progress {
+                stage: Stage::Locating,
+                done,
+                total,
+            })
+        },
+    )?;
+    Ok(found.into_iter().flatten().collect())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn test_functions_and_names() {
+        // λ = −1.05 and −0.6: det(M + I) < 0, det(M − I) > 0.
+        let l = [(-1.05, 0.0), (-0.6, 0.0)];
+        assert!(Kind::PeriodDoubling.test(l).unwrap() < 0.0);
+        assert!(Kind::Fold.test(l).unwrap() > 0.0);
+        let before = [(-0.95, 0.0), (-0.6, 0.0)];
+        let kinds: Vec<Kind> = smooth_kinds(before, l).collect();
+        assert_eq!(kinds, vec![Kind::PeriodDoubling]);
+        // A complex pair 0.9 ± 0.5i has modulus² 1.06: det M − 1 > 0.
+        let ns = Kind::NeimarkSacker.test([(0.9, 0.5), (0.9, -0.5)]).unwrap();
+        assert!((ns - 0.06).abs() < 1e-12);
+        assert_eq!(Kind::PeriodDoubling.name(), "period_doubling");
+        assert!(Kind::Grazing.test(l).is_none());
+    }
+}
