@@ -23,10 +23,14 @@
 //! orbit has a smaller period (where an arclength trace of `p`-periodic orbits runs onto the
 //! orbit it doubled from) are not reported: that orbit's own branch reports them.
 
+use std::num::NonZeroU32;
+
 use bistable_core::shooting::eigenvalues;
+use bistable_core::SimError;
 
 use crate::arclength::{correct, norm, period_map, ArcPoint};
 use crate::branches::Branches;
+use crate::cycles::record_cycles;
 use crate::orbit::Orbit;
 use crate::parallel::{self, Threads};
 use crate::progress::{OnProgress, Progress, Stage};
@@ -37,6 +41,8 @@ use crate::Model;
 pub const NONSMOOTH_TOL: f64 = 1e-10;
 /// Regula falsi on a smooth test function stops when its bracket is this short in `s`.
 pub const SMOOTH_TOL: f64 = 1e-12;
+/// Samples per shaker period for the largest displacement of a located orbit.
+const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
 /// Most corrector solves spent on one root.
 const MAX_SOLVES: usize = 80;
 /// A `p`-periodic orbit whose section point `d | p` periods on is this close (max norm,
@@ -164,6 +170,9 @@ pub struct BifurcationPoint {
     pub v0: f64,
     /// Floquet multipliers `(re, im)` of that orbit, largest modulus first.
     pub multipliers: [(f64, f64); 2],
+    /// Largest displacement on that orbit (units of `Δx`, sampled 128 times per shaker
+    /// period; NaN if its simulation failed).
+    pub max_x: f64,
     /// Bound on the error of `omega`: the Ω-width of the final bracket (smooth kinds: the
     /// regula-falsi bracket, at most [`SMOOTH_TOL`] when it converged; grazing and sticking:
     /// the bisection bracket, at most [`NONSMOOTH_TOL`]).
@@ -356,6 +365,7 @@ pub fn between(
             x0: at.u[0],
             v0: at.u[1],
             multipliers: at.multipliers,
+            max_x: f64::NAN,
             omega_error: err,
             branch,
             index,
@@ -400,7 +410,20 @@ pub fn between(
     }
     out.retain(|(_, p)| period == 1 || !smaller_period(model, period, [p.x0, p.v0, p.omega]));
     out.sort_by(|x, y| x.0.total_cmp(&y.0));
-    out.into_iter().map(|(_, p)| p).collect()
+    out.into_iter()
+        .map(|(_, mut p)| {
+            p.max_x = max_x(model, period, [p.x0, p.v0, p.omega]).unwrap_or(f64::NAN);
+            p
+        })
+        .collect()
+}
+
+/// Largest displacement on the `period`-periodic orbit through `(x, x')` at `Ω` (`u`).
+fn max_x(model: &Model, period: u32, u: [f64; 3]) -> Result<f64, SimError> {
+    let here = model.at(u[2], model.velocity())?;
+    let mut sim = here.simulator_from(u[0].max(0.0), u[1])?;
+    let c = record_cycles(&mut sim, here.shaker, 0, period, SAMPLES)?;
+    Ok(c.max_x.iter().copied().fold(f64::MIN, f64::max))
 }
 
 /// One branch to search: a model at its V, its period and its orbits in order along it.

@@ -21,6 +21,8 @@
 //! - `map.rs`: `bistable map`;
 //! - `basins.rs`: `bistable basins`;
 //! - `branches.rs`: periodic-orbit branches as CSV rows and curves on a chart;
+//! - `bifurcations.rs`: bifurcation points located on the branches as CSV rows, JSON and
+//!   markers;
 //! - `bifurcation.rs`: `bistable bifurcation`;
 //! - `orbit.rs`: `bistable orbit`;
 //! - `thresholds.rs`: `bistable thresholds`;
@@ -33,6 +35,7 @@
 
 mod basins;
 mod bifurcation;
+mod bifurcations;
 mod branches;
 mod classify;
 mod common;
