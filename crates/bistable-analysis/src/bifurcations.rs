@@ -2,17 +2,17 @@
 //! between consecutive orbits of a branch is detected, located and classified.
 //!
 //! Between two consecutive orbits `a`, `b` of a branch (fixed points of the `p`-period map in
-//! `u = (x, x', Ω)`), the branch is parametrised by the distance `s` along the chord from `u_a`
-//! to `u_b`: the orbit at `s` solves the map's fixed-point equations in the plane through
-//! `u_a + s·t` normal to the chord direction `t` (the pseudo-arclength corrector), so the
-//! parametrisation holds through folds. Then:
+//! `u = (x, x', Ω)`), a bracket of two solved orbits is shrunk: each trial orbit is predicted
+//! on the chord between the bracket's ends and solved for the map's fixed-point equations in
+//! the plane normal to that chord (the pseudo-arclength corrector), so the parametrisation
+//! holds through folds. Then:
 //!
 //! * **grazing** / **sticking**: when the impacts per period (or whether the mass sticks)
-//!   differ at `a` and `b`, bisection in `s` brackets the change to [`NONSMOOTH_TOL`] in `s`
+//!   differ at `a` and `b`, bisection brackets the change to [`NONSMOOTH_TOL`] in `(x, x', Ω)`
 //!   (re-solving the orbit at each trial); the test functions below jump there, so they are
 //!   only used on the smooth pieces on either side of the bracket.
 //! * on each smooth piece, a sign change of a test function of the monodromy matrix `M` is
-//!   located by the Illinois variant of regula falsi in `s` to [`SMOOTH_TOL`]: **fold**
+//!   located by the Illinois variant of regula falsi to [`SMOOTH_TOL`]: **fold**
 //!   `det(M − I)` (a multiplier through +1), **period doubling** `det(M + I)` (through −1),
 //!   **Neimark–Sacker** `det M − 1` while the multipliers are a complex pair (their modulus
 //!   through 1; with damping or `e < 1`, `det M < 1` always, so this cannot occur in the
@@ -36,10 +36,11 @@ use crate::parallel::{self, Threads};
 use crate::progress::{OnProgress, Progress, Stage};
 use crate::Model;
 
-/// Bisection of a grazing or sticking change stops when its bracket is this short in `s`
-/// (Euclidean in `(x, x', Ω)`, so Ω is known at least this well).
+/// Bisection of a grazing or sticking change stops when its bracket is this short (Euclidean
+/// in `(x, x', Ω)`, so Ω is known at least this well).
 pub const NONSMOOTH_TOL: f64 = 1e-10;
-/// Regula falsi on a smooth test function stops when its bracket is this short in `s`.
+/// Regula falsi on a smooth test function stops when its bracket is this short (as
+/// [`NONSMOOTH_TOL`]).
 pub const SMOOTH_TOL: f64 = 1e-12;
 /// Samples per shaker period for the largest displacement of a located orbit.
 const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
@@ -191,7 +192,9 @@ pub struct BifurcationPoint {
     pub sticks_after: bool,
 }
 
-/// An orbit on the chord parametrisation: `s`, the corrected `u`, multipliers, impacts, sticks.
+/// A solved orbit of the interval: its position `s` along it (0 at `a`, the chord length at
+/// `b`, interpolated for trial orbits: used only to order the points found), `u`, multipliers,
+/// impacts and sticking.
 #[derive(Debug, Clone, Copy)]
 struct Solved {
     s: f64,
@@ -207,21 +210,27 @@ impl Solved {
     }
 }
 
-/// One interval of a branch, parametrised by the chord.
+/// The orbits of one interval of a branch, each solved in the plane normal to the chord of
+/// the current bracket.
 struct Chord<'a> {
     model: &'a Model,
     period: u32,
-    start: [f64; 3],
-    t: [f64; 3],
 }
 
 impl Chord<'_> {
-    /// The orbit at distance `s` along the chord (`None`: the corrector failed).
-    fn at(&self, s: f64) -> Option<Solved> {
-        let pred = [0, 1, 2].map(|k| self.start[k] + s * self.t[k]);
-        let (u, e, _) = correct(self.model, self.period, pred, self.t)?;
+    /// The orbit a fraction `f` of the way from `lo` to `hi` (solved orbits): predicted on
+    /// their chord, corrected in the plane normal to it (`None`: the corrector failed). Its
+    /// `s` is interpolated from theirs.
+    fn at(&self, lo: &Solved, hi: &Solved, f: f64) -> Option<Solved> {
+        let d = [0, 1, 2].map(|k| hi.u[k] - lo.u[k]);
+        let len = norm(d);
+        if !(len.is_finite() && len > 0.0) {
+            return None;
+        }
+        let pred = [0, 1, 2].map(|k| lo.u[k] + f * d[k]);
+        let (u, e, _) = correct(self.model, self.period, pred, d.map(|c| c / len))?;
         Some(Solved {
-            s,
+            s: lo.s + f * (hi.s - lo.s),
             u,
             multipliers: eigenvalues(e.m),
             impacts: e.impacts,
@@ -229,14 +238,22 @@ impl Chord<'_> {
         })
     }
 
+    /// The orbit near the fraction `f` from `lo` to `hi`, or if the corrector fails there, at
+    /// a quarter of the bracket nearer either end.
+    fn near(&self, lo: &Solved, hi: &Solved, f: f64) -> Option<Solved> {
+        [f, 0.5 * f, 0.5 * (1.0 + f)]
+            .into_iter()
+            .find_map(|g| self.at(lo, hi, g))
+    }
+
     /// Bisects between `lo` and `hi` (different impacts or sticking) to [`NONSMOOTH_TOL`];
     /// the final bracket, shorter only as far as the corrector converged.
     fn bisect(&self, mut lo: Solved, mut hi: Solved) -> (Solved, Solved) {
         for _ in 0..MAX_SOLVES {
-            if (hi.s - lo.s).abs() <= NONSMOOTH_TOL {
+            if dist(&lo, &hi) <= NONSMOOTH_TOL {
                 break;
             }
-            let Some(mid) = self.at(0.5 * (lo.s + hi.s)) else {
+            let Some(mid) = self.near(&lo, &hi, 0.5) else {
                 break;
             };
             if mid.side() == lo.side() {
@@ -249,7 +266,8 @@ impl Chord<'_> {
     }
 
     /// The root of `kind`'s test function between `lo` and `hi` (of opposite signs) by the
-    /// Illinois method: the last orbit solved and the Ω-width of the final bracket.
+    /// Illinois method to [`SMOOTH_TOL`]: the last orbit solved and the Ω-width of the final
+    /// bracket.
     fn root(&self, kind: Kind, mut lo: Solved, mut hi: Solved) -> Option<(Solved, f64)> {
         let f = |p: &Solved| kind.test(p.multipliers).unwrap_or(f64::NAN);
         let (mut flo, mut fhi) = (f(&lo), f(&hi));
@@ -257,16 +275,16 @@ impl Chord<'_> {
         // Which end was kept last (−1: lo, 1: hi), for the Illinois halving.
         let mut kept = 0;
         for _ in 0..MAX_SOLVES {
-            if (hi.s - lo.s).abs() <= SMOOTH_TOL {
+            if dist(&lo, &hi) <= SMOOTH_TOL {
                 break;
             }
-            let mut s = (lo.s * fhi - hi.s * flo) / (fhi - flo);
-            if !(s.is_finite() && s > lo.s.min(hi.s) && s < lo.s.max(hi.s)) {
-                s = 0.5 * (lo.s + hi.s);
+            let mut g = flo / (flo - fhi);
+            if !(g.is_finite() && g > 0.0 && g < 1.0) {
+                g = 0.5;
             }
-            let p = self.at(s)?;
+            let p = self.near(&lo, &hi, g)?;
             let fp = f(&p);
-            if !fp.is_finite() {
+            if !fp.is_finite() || p.side() != lo.side() {
                 return None;
             }
             best = p;
@@ -293,6 +311,11 @@ impl Chord<'_> {
         }
         Some((best, (hi.u[2] - lo.u[2]).abs()))
     }
+}
+
+/// Distance of two solved orbits in `(x, x', Ω)`.
+fn dist(a: &Solved, b: &Solved) -> f64 {
+    norm([0, 1, 2].map(|k| b.u[k] - a.u[k]))
 }
 
 /// Whether a point on the way from `a` to `b` may hold a bifurcation: a change of impacts or
@@ -337,17 +360,11 @@ pub fn between(
     index: usize,
 ) -> Vec<BifurcationPoint> {
     let (ua, ub) = (a.u(), b.u());
-    let d = [ub[0] - ua[0], ub[1] - ua[1], ub[2] - ua[2]];
-    let len = norm(d);
+    let len = norm([0, 1, 2].map(|k| ub[k] - ua[k]));
     if !(len.is_finite() && len > 0.0) || !changes(a, b) {
         return Vec::new();
     }
-    let chord = Chord {
-        model,
-        period,
-        start: ua,
-        t: d.map(|c| c / len),
-    };
+    let chord = Chord { model, period };
     let end = |p: &BranchPoint, s: f64| Solved {
         s,
         u: p.u(),
@@ -405,7 +422,7 @@ pub fn between(
             if kind == Kind::NeimarkSacker && at.multipliers[0].1 == 0.0 {
                 continue;
             }
-            out.push((at.s, point(kind, &at, err, &sa, &sb)));
+            out.push((at.s, point(kind, &at, err, &lo, &hi)));
         }
     }
     out.retain(|(_, p)| period == 1 || !smaller_period(model, period, [p.x0, p.v0, p.omega]));
