@@ -361,7 +361,7 @@ pub fn between(
 ) -> Vec<BifurcationPoint> {
     let (ua, ub) = (a.u(), b.u());
     let len = norm([0, 1, 2].map(|k| ub[k] - ua[k]));
-    if !(len.is_finite() && len > 0.0) || !changes(a, b) {
+    if !(len.is_finite() && len > 0.0 && changes(a, b)) {
         return Vec::new();
     }
     let chord = Chord { model, period };
