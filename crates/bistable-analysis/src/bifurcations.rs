@@ -174,9 +174,10 @@ pub struct BifurcationPoint {
     /// Largest displacement on that orbit (units of `Δx`, sampled 128 times per shaker
     /// period; NaN if its simulation failed).
     pub max_x: f64,
-    /// Bound on the error of `omega`: the Ω-width of the final bracket (smooth kinds: the
-    /// regula-falsi bracket, at most [`SMOOTH_TOL`] when it converged; grazing and sticking:
-    /// the bisection bracket, at most [`NONSMOOTH_TOL`]).
+    /// Bound on the error of `omega`: smooth kinds, the Ω-width of the final regula-falsi
+    /// bracket (at most [`SMOOTH_TOL`] when it converged); grazing and sticking, the distance
+    /// in `(x, x', Ω)` of the bisection's final bracket ends (at most [`NONSMOOTH_TOL`] when it
+    /// converged; larger where the corrector stopped converging near a grazing corner).
     pub omega_error: f64,
     /// Which branch of the caller's list the point is on.
     pub branch: usize,
@@ -205,8 +206,9 @@ struct Solved {
 }
 
 impl Solved {
+    /// As [`side`].
     fn side(&self) -> (u64, bool) {
-        (self.impacts, self.sticks)
+        (if self.sticks { 0 } else { self.impacts }, self.sticks)
     }
 }
 
@@ -219,8 +221,9 @@ struct Chord<'a> {
 
 impl Chord<'_> {
     /// The orbit a fraction `f` of the way from `lo` to `hi` (solved orbits): predicted on
-    /// their chord, corrected in the plane normal to it (`None`: the corrector failed). Its
-    /// `s` is interpolated from theirs.
+    /// their chord, corrected in the plane normal to it; `None` when the corrector fails or
+    /// lands further from the prediction than the chord is long (on another part of the
+    /// branch). Its `s` is interpolated from theirs.
     fn at(&self, lo: &Solved, hi: &Solved, f: f64) -> Option<Solved> {
         let d = [0, 1, 2].map(|k| hi.u[k] - lo.u[k]);
         let len = norm(d);
@@ -228,17 +231,20 @@ impl Chord<'_> {
             return None;
         }
         let pred = [0, 1, 2].map(|k| lo.u[k] + f * d[k]);
-        let (u, e, _) = correct(self.model, self.period, pred, d.map(|c| c / len))?;
-        Some(Solved {
-            s: lo.s + f * (hi.s - lo.s),
-            u,
-            multipliers: eigenvalues(e.m),
-            impacts: e.impacts,
-            sticks: e.sticks,
-        })
+        let s = lo.s + f * (hi.s - lo.s);
+        let near = |u: [f64; 3]| norm([0, 1, 2].map(|k| u[k] - pred[k])) <= len;
+        correct(self.model, self.period, pred, d.map(|c| c / len))
+            .filter(|(u, ..)| near(*u))
+            .map(|(u, e, _)| Solved {
+                s,
+                u,
+                multipliers: eigenvalues(e.m),
+                impacts: e.impacts,
+                sticks: e.sticks,
+            })
     }
 
-    /// The orbit near the fraction `f` from `lo` to `hi`, or if the corrector fails there, at
+    /// The orbit near the fraction `f` from `lo` to `hi`, or if none is found there, at
     /// a quarter of the bracket nearer either end.
     fn near(&self, lo: &Solved, hi: &Solved, f: f64) -> Option<Solved> {
         [f, 0.5 * f, 0.5 * (1.0 + f)]
@@ -321,9 +327,15 @@ fn dist(a: &Solved, b: &Solved) -> f64 {
 /// Whether a point on the way from `a` to `b` may hold a bifurcation: a change of impacts or
 /// sticking, or a sign change of a test function.
 fn changes(a: &BranchPoint, b: &BranchPoint) -> bool {
-    a.impacts != b.impacts
-        || a.sticks != b.sticks
-        || smooth_kinds(a.multipliers, b.multipliers).next().is_some()
+    side(a) != side(b) || smooth_kinds(a.multipliers, b.multipliers).next().is_some()
+}
+
+/// What must agree on both sides of a smooth stretch: the impacts per period and sticking.
+/// Orbits that stick on both sides count as one side whatever their impacts: the number of
+/// chatter impacts before the mass settles on the plate changes with the chatter rule's
+/// truncation, not with a grazing flight.
+fn side(p: &BranchPoint) -> (u64, bool) {
+    (if p.sticks { 0 } else { p.impacts }, p.sticks)
 }
 
 /// The smooth kinds whose test functions have opposite signs at `la` and `lb`.
@@ -405,8 +417,13 @@ pub fn between(
             u: [0, 1, 2].map(|k| 0.5 * (lo.u[k] + hi.u[k])),
             ..lo
         };
-        let mut p = point(kind, &lo, (hi.u[2] - lo.u[2]).abs(), &lo, &hi);
-        p.omega = mid.u[2];
+        // The change lies on the branch between the bracket's orbits, so Ω is known to their
+        // distance (also where Ω hardly differs: the branch can turn at a grazing corner).
+        let err = (hi.u[2] - lo.u[2]).abs().max(dist(&lo, &hi));
+        let p = BifurcationPoint {
+            omega: mid.u[2],
+            ..point(kind, &lo, err, &lo, &hi)
+        };
         out.push((mid.s, p));
         pieces = vec![(sa, lo), (hi, sb)];
     }
@@ -456,14 +473,32 @@ pub struct Branch {
 
 impl Branch {
     /// The polylines of natural continuation `b` over the grid `models` (one V), one branch
-    /// each (orbits by increasing Ω).
+    /// each (orbits by increasing Ω). A `p`-periodic orbit has `p` section points, each a
+    /// fixed point of the `p`-period map; each orbit is represented by the one nearest to
+    /// that of the orbit before it, so that consecutive points follow one fixed point.
     pub fn from_natural(models: &[Model], b: &Branches) -> Vec<Branch> {
         b.paths()
             .into_iter()
-            .map(|path| Branch {
-                model: models[path[0].0],
-                period: b.period,
-                points: path.iter().map(|&n| b.orbit(n).into()).collect(),
+            .map(|path| {
+                let mut points: Vec<BranchPoint> = Vec::with_capacity(path.len());
+                for &n in &path {
+                    let o = b.orbit(n);
+                    let mut p = BranchPoint::from(o);
+                    if let Some(prev) = points.last() {
+                        let d = |&(x, v): &(f64, f64)| (x - prev.x0).hypot(v - prev.v0);
+                        if let Some(&(x, v)) =
+                            o.sections.iter().min_by(|a, c| d(a).total_cmp(&d(c)))
+                        {
+                            (p.x0, p.v0) = (x, v);
+                        }
+                    }
+                    points.push(p);
+                }
+                Branch {
+                    model: models[path[0].0],
+                    period: b.period,
+                    points,
+                }
             })
             .collect()
     }
@@ -483,7 +518,8 @@ impl Branch {
 }
 
 /// Locates every bifurcation point on `branches` (the intervals with a change, in parallel on
-/// `threads`), ordered by branch and position along it. Reports [`Stage::Locating`] progress;
+/// `threads`), ordered by branch and position along it; a point found again (same kind,
+/// period, Ω and orbit) is reported once. Reports [`Stage::Locating`] progress;
 /// an error of `progress` cancels.
 pub fn locate<E>(
     branches: &[Branch],
@@ -517,7 +553,24 @@ pub fn locate<E>(
             })
         },
     )?;
-    Ok(found.into_iter().flatten().collect())
+    let mut out: Vec<BifurcationPoint> = Vec::new();
+    for p in found.into_iter().flatten() {
+        if !out.iter().any(|q| same_point(q, &p)) {
+            out.push(p);
+        }
+    }
+    Ok(out)
+}
+
+/// Whether `p` and `q` are one point found twice (on branches sharing an interval, or on
+/// copies of an orbit): same kind, period and V, Ω within their error bounds (and 1e-9),
+/// fixed points within 1e-6.
+fn same_point(p: &BifurcationPoint, q: &BifurcationPoint) -> bool {
+    p.kind == q.kind
+        && p.period == q.period
+        && p.velocity == q.velocity
+        && (p.omega - q.omega).abs() <= p.omega_error.max(q.omega_error).max(1e-9)
+        && (p.x0 - q.x0).abs().max((p.v0 - q.v0).abs()) <= 1e-6
 }
 
 #[cfg(test)]
