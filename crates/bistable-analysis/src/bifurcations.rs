@@ -10,7 +10,11 @@
 //! * **grazing** / **sticking**: when the impacts per period (or whether the mass sticks)
 //!   differ at `a` and `b`, bisection brackets the change to [`NONSMOOTH_TOL`] in `(x, x', Ω)`
 //!   (re-solving the orbit at each trial); the test functions below jump there, so they are
-//!   only used on the smooth pieces on either side of the bracket.
+//!   only used on the smooth pieces on either side of the bracket. Near a grazing corner the
+//!   impacting side's multipliers grow without bound and the corrector may stop converging:
+//!   the bracket then stays wider, and the reported error says so. The impact counts of
+//!   orbits that stick on both sides are not compared (the chatter before sticking is
+//!   truncated by the chatter rule, so its count is no grazing).
 //! * on each smooth piece, a sign change of a test function of the monodromy matrix `M` is
 //!   located by the Illinois variant of regula falsi to [`SMOOTH_TOL`]: **fold**
 //!   `det(M − I)` (a multiplier through +1), **period doubling** `det(M + I)` (through −1),
@@ -174,10 +178,10 @@ pub struct BifurcationPoint {
     /// Largest displacement on that orbit (units of `Δx`, sampled 128 times per shaker
     /// period; NaN if its simulation failed).
     pub max_x: f64,
-    /// Bound on the error of `omega`: smooth kinds, the Ω-width of the final regula-falsi
-    /// bracket (at most [`SMOOTH_TOL`] when it converged); grazing and sticking, the distance
-    /// in `(x, x', Ω)` of the bisection's final bracket ends (at most [`NONSMOOTH_TOL`] when it
-    /// converged; larger where the corrector stopped converging near a grazing corner).
+    /// Bound on the error of `omega`: the distance in `(x, x', Ω)` of the final bracket's
+    /// orbits (smooth kinds: regula falsi, at most [`SMOOTH_TOL`] when it converged; grazing
+    /// and sticking: bisection, at most [`NONSMOOTH_TOL`] when it converged, larger where the
+    /// corrector stopped converging near a grazing corner).
     pub omega_error: f64,
     /// Which branch of the caller's list the point is on.
     pub branch: usize,
@@ -272,8 +276,8 @@ impl Chord<'_> {
     }
 
     /// The root of `kind`'s test function between `lo` and `hi` (of opposite signs) by the
-    /// Illinois method to [`SMOOTH_TOL`]: the last orbit solved and the Ω-width of the final
-    /// bracket.
+    /// Illinois method to [`SMOOTH_TOL`]: the last orbit solved and the length of the final
+    /// bracket in `(x, x', Ω)`.
     fn root(&self, kind: Kind, mut lo: Solved, mut hi: Solved) -> Option<(Solved, f64)> {
         let f = |p: &Solved| kind.test(p.multipliers).unwrap_or(f64::NAN);
         let (mut flo, mut fhi) = (f(&lo), f(&hi));
@@ -315,7 +319,7 @@ impl Chord<'_> {
                 kept = 1;
             }
         }
-        Some((best, (hi.u[2] - lo.u[2]).abs()))
+        Some((best, dist(&lo, &hi)))
     }
 }
 
