@@ -46,6 +46,7 @@ pub mod sensitivity;
 pub mod spectrum;
 pub mod sweep;
 pub mod thresholds;
+pub mod twoparam;
 
 pub use model::Model;
 pub use parallel::Threads;
