@@ -266,6 +266,29 @@ pub fn continue_point(
     Ok(out)
 }
 
+/// Whether the bifurcation point `p` lies on `curve` (within `tol` of one of its segments,
+/// Euclidean in `(x, x', Ω, V)`), with the same kind and period as `curve` was traced for:
+/// a second start on a curve already traced (one that turns in V meets V again).
+pub fn covers(curve: &[CurvePoint], p: &BifurcationPoint, tol: f64) -> bool {
+    let u = [p.x0, p.v0, p.omega, p.velocity];
+    let w = |c: &CurvePoint| [c.x0, c.v0, c.omega, c.velocity];
+    curve.windows(2).any(|seg| {
+        let (a, b) = (w(&seg[0]), w(&seg[1]));
+        let d: [f64; 4] = [0, 1, 2, 3].map(|k| b[k] - a[k]);
+        let l2: f64 = d.iter().map(|c| c * c).sum();
+        let s = if l2 > 0.0 {
+            ((0..4).map(|k| (u[k] - a[k]) * d[k]).sum::<f64>() / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (0..4)
+            .map(|k| (u[k] - a[k] - s * d[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            <= tol
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

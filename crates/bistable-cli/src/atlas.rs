@@ -8,13 +8,16 @@ use serde::Serialize;
 
 use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch, Kind};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
-use bistable_analysis::twoparam::{continue_point, CurveOptions, CurvePoint};
+use bistable_analysis::twoparam::{continue_point, covers, CurveOptions, CurvePoint};
 
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
 use crate::output::{print_json, print_text, CsvFile, Field};
 use crate::progress::StageBars;
 use crate::ranges::{Pair, Range};
+
+/// A located point this close (Euclidean in x, x', Ω, V) to a curve already traced is on it.
+const ON_CURVE: f64 = 1e-4;
 
 /// Long description shown by `bistable atlas --help`.
 pub const LONG_ABOUT: &str = "\
@@ -27,7 +30,8 @@ det(M + I) = 0 and followed by pseudo-arclength continuation in (x, x', Ω, V)
 (Jacobian: M − I exactly, the rest by central differences). A curve ends where
 Ω leaves the --continue-omega range, V leaves --velocity-bounds, the impacts per
 period change (the condition is not smooth there), the step collapses, or after
---max-points points each way.";
+--max-points points each way. A located point already on a traced curve (one
+that turns in V meets --velocity twice) starts no second curve.";
 
 /// Shown after the options by `bistable atlas --help`.
 pub const AFTER_HELP: &str = "\
@@ -191,6 +195,13 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
     };
     let mut all: Vec<(BifurcationPoint, Vec<CurvePoint>)> = Vec::new();
     for s in starts {
+        // A curve that turns in V meets --velocity again: its second point is on it.
+        if all
+            .iter()
+            .any(|(t, c)| t.kind == s.kind && t.period == s.period && covers(c, &s, ON_CURVE))
+        {
+            continue;
+        }
         let c = continue_point(&models[0], &s, o).map_err(|e| {
             CliError::Failed(format!(
                 "cannot continue the {} at Ω = {}: {e}",
