@@ -320,4 +320,37 @@ mod tests {
             "{t:?}"
         );
     }
+
+    #[test]
+    fn a_point_on_a_traced_curve_is_covered() {
+        let at = |omega: f64, velocity: f64| CurvePoint {
+            omega,
+            velocity,
+            x0: 0.1,
+            v0: 0.0,
+            multipliers: [(-1.0, 0.0), (0.5, 0.0)],
+            impacts: 1,
+        };
+        let curve = [at(2.0, 0.06), at(2.1, 0.07)];
+        let p = |omega, velocity| BifurcationPoint {
+            kind: Kind::PeriodDoubling,
+            omega,
+            velocity,
+            period: 1,
+            x0: 0.1,
+            v0: 0.0,
+            multipliers: [(-1.0, 0.0), (0.5, 0.0)],
+            max_x: 0.2,
+            omega_error: 0.0,
+            branch: 0,
+            index: 0,
+            impacts_before: 1,
+            impacts_after: 1,
+            sticks_before: false,
+            sticks_after: false,
+        };
+        assert!(covers(&curve, &p(2.05, 0.065), 1e-9));
+        assert!(!covers(&curve, &p(2.05, 0.066), 1e-4));
+        assert!(!covers(&curve, &p(2.2, 0.08), 1e-4));
+    }
 }
