@@ -152,6 +152,22 @@ def test_continue_omega_arclength_equals_cli(cli, tmp_path):
     assert_frames_equal(got["orbits"], csv, bool_cols=("stable",))
 
 
+def test_continue_omega_bifurcations_equal_cli(cli, tmp_path):
+    # Fig. 6: the P-2 → P-4 doubling at V = 0.07 on the coarse grid of issue 22.
+    csv = tmp_path / "p2.csv"
+    ref = cli_json(cli, "orbit", "--continue-omega", "2.05:2.25:41", "--velocity", 0.07,
+                   "--period", 2, "--out", csv, "--threads", 2)
+    got = bi.continue_omega(bi.linspace(2.05, 2.25, 41), 0.07, period=2, threads=2)
+    df = got["bifurcations"]
+    assert list(df.columns) == list(bi.analyses.BIFURCATION_COLUMNS)
+    assert list(df["kind"]) == ["period_doubling"]
+    assert 2.23 < df["omega"][0] < 2.24
+    assert abs(df["multiplier_1_re"][0] + 1.0) < 1e-8
+    assert len(ref["bifurcations"]) == 1 and close(ref["bifurcations"][0]["omega"], df["omega"][0])
+    assert_frames_equal(df, tmp_path / "p2_bifurcations.csv",
+                        bool_cols=("sticks_before", "sticks_after"))
+
+
 def test_continue_omega_errors():
     w = bi.linspace(1.6, 2.4, 3)
     with pytest.raises(ValueError, match="for 'method': must be 'natural' or 'arclength'"):

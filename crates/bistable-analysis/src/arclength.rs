@@ -38,6 +38,8 @@ pub struct ArcPoint {
     pub stable: bool,
     /// Impacts per orbit.
     pub impacts: u64,
+    /// Whether the mass sticks on the orbit (then `M = 0`).
+    pub sticks: bool,
     /// Largest displacement on the orbit (units of `Δx`).
     pub max_x: f64,
 }
@@ -77,19 +79,23 @@ impl ArcOptions {
     }
 }
 
-/// Residual, Jacobian `[M − I | ∂P/∂Ω]`, monodromy and impacts at `u`.
-struct Eval {
+/// Residual, Jacobian `[M − I | ∂P/∂Ω]`, monodromy, impacts and sticking at `u`.
+pub(crate) struct Eval {
     g: [f64; 2],
     jac: [[f64; 3]; 2],
-    m: [[f64; 2]; 2],
-    impacts: u64,
+    /// Monodromy matrix `M` (0 once the mass sticks).
+    pub(crate) m: [[f64; 2]; 2],
+    /// Impacts per orbit.
+    pub(crate) impacts: u64,
+    /// Whether the mass sticks on the orbit.
+    pub(crate) sticks: bool,
 }
 
-/// `(P(y), M, impacts)`.
-type MapResult = ([f64; 2], [[f64; 2]; 2], u64);
+/// `(P(y), M, impacts, sticks)`.
+type MapResult = ([f64; 2], [[f64; 2]; 2], u64, bool);
 
-/// `(P(y), M, impacts)` of the `p`-period map at `Ω`.
-fn period_map(
+/// `(P(y), M, impacts, sticks)` of the `p`-period map at `Ω` from `y` at plate phase 0.
+pub(crate) fn period_map(
     model: &Model,
     omega: f64,
     p: u32,
@@ -108,18 +114,21 @@ fn period_map(
     if variational {
         sim.enable_variational();
     }
-    sim.advance_instant(plate.section(u64::from(p)), &mut |_: &Event| {})?;
+    let mut sticks = false;
+    sim.advance_instant(plate.section(u64::from(p)), &mut |e: &Event| {
+        sticks |= matches!(e, Event::StickStart { .. })
+    })?;
     let st = sim.state();
     let m = sim.variational().unwrap_or([[0.0; 2]; 2]);
-    Ok(([st.x, st.v], m, sim.stats().impacts))
+    Ok(([st.x, st.v], m, sim.stats().impacts, sticks))
 }
 
 fn evaluate(model: &Model, p: u32, u: [f64; 3]) -> Result<Eval, SimError> {
     let y = [u[0], u[1]];
-    let (py, m, impacts) = period_map(model, u[2], p, y, true)?;
+    let (py, m, impacts, sticks) = period_map(model, u[2], p, y, true)?;
     let d = 1e-6 * u[2].abs().max(1.0);
-    let (plus, _, _) = period_map(model, u[2] + d, p, y, false)?;
-    let (minus, _, _) = period_map(model, u[2] - d, p, y, false)?;
+    let (plus, ..) = period_map(model, u[2] + d, p, y, false)?;
+    let (minus, ..) = period_map(model, u[2] - d, p, y, false)?;
     let dp = [
         (plus[0] - minus[0]) / (2.0 * d),
         (plus[1] - minus[1]) / (2.0 * d),
@@ -132,6 +141,7 @@ fn evaluate(model: &Model, p: u32, u: [f64; 3]) -> Result<Eval, SimError> {
         ],
         m,
         impacts,
+        sticks,
     })
 }
 
@@ -143,11 +153,11 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
+pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
-fn norm(a: [f64; 3]) -> f64 {
+pub(crate) fn norm(a: [f64; 3]) -> f64 {
     dot(a, a).sqrt()
 }
 
@@ -171,7 +181,7 @@ fn tangent(jac: [[f64; 3]; 2], along: Option<[f64; 3]>, dir: f64) -> Option<[f64
 }
 
 /// Solves the 3×3 system `a·x = b` by Gaussian elimination with partial pivoting.
-fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
+pub(crate) fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
     for col in 0..3 {
         let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
         if a[piv][col] == 0.0 || !a[piv][col].is_finite() {
@@ -196,9 +206,15 @@ fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
     x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
-/// Newton on the augmented system from `pred`, with the arclength condition along `t`.
+/// Newton on the augmented system from `pred`, with the arclength condition along `t` (the
+/// solution lies in the plane through `pred` normal to `t`, a unit vector in `(x, x', Ω)`).
 /// Returns the converged point, its evaluation and the iterations used.
-fn correct(model: &Model, p: u32, pred: [f64; 3], t: [f64; 3]) -> Option<([f64; 3], Eval, u32)> {
+pub(crate) fn correct(
+    model: &Model,
+    p: u32,
+    pred: [f64; 3],
+    t: [f64; 3],
+) -> Option<([f64; 3], Eval, u32)> {
     let mut u = pred;
     for it in 0..12 {
         let e = evaluate(model, p, u).ok()?;
@@ -229,6 +245,7 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimEr
         multipliers,
         stable: multipliers[0].0.hypot(multipliers[0].1) < 1.0,
         impacts: e.impacts,
+        sticks: e.sticks,
         max_x: c.max_x.iter().copied().fold(f64::MIN, f64::max),
     })
 }
@@ -390,6 +407,7 @@ mod tests {
             multipliers: [(0.5, 0.0); 2],
             stable: true,
             impacts: 1,
+            sticks: false,
             max_x: 0.1,
         };
         let t: Vec<ArcPoint> = [1.0, 1.2, 1.1, 1.0, 1.3].map(at).to_vec();

@@ -26,6 +26,7 @@
 pub mod arclength;
 pub mod basins;
 pub mod bifurcation;
+pub mod bifurcations;
 pub mod branches;
 pub mod continuation;
 pub mod cycles;
@@ -45,6 +46,7 @@ pub mod sensitivity;
 pub mod spectrum;
 pub mod sweep;
 pub mod thresholds;
+pub mod twoparam;
 
 pub use model::Model;
 pub use parallel::Threads;

@@ -11,6 +11,8 @@ pub enum Stage {
     Shooting,
     /// Continuing the orbits of each period along the grid.
     Continuing,
+    /// Locating the bifurcation points on the branches (one item per interval with a change).
+    Locating,
 }
 
 /// `done` of `total` items of `stage` finished (`done <= total`).

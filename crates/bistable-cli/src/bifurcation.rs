@@ -10,10 +10,12 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use bistable_analysis::bifurcation::{self, Bifurcation, BifurcationOptions};
+use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch};
 use bistable_analysis::branches::Branches;
 use bistable_analysis::cycles::Cycles;
 use bistable_analysis::Model;
 
+use crate::bifurcations;
 use crate::branches;
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
@@ -44,11 +46,18 @@ point to point in both directions. Stable orbits (all Floquet multipliers inside
 the unit circle) are drawn thick and solid, unstable ones thin and dashed, each
 period in its own colour over the max-x panel.
 
+With --param omega, the bifurcation points on the branches (fold, period
+doubling, Neimark–Sacker, grazing, sticking) are located between consecutive
+orbits and drawn as markers (see below; natural continuation stops at folds,
+use 'bistable orbit --continue-omega --arclength' to pass them). With --param
+velocity no points are located (the locator follows branches in Ω).
+
 Prints a summary per point (detected period, number of distinct max-x values,
-impacts per cycle); JSON with --json.";
+impacts per cycle) and the bifurcation points; JSON with --json.";
 
 /// Shown after the options by `bistable bifurcation --help`.
-pub const AFTER_HELP: &str = "\
+pub const AFTER_HELP: &str = concat!(
+    "\
 CSV (--out FILE.csv): omega,velocity,kind,cycle,value with kind max_x (value:
 largest x in that recorded cycle) or impact_phase (value: phase in cycles of an
 impact in that cycle); cycle counts from 0 at the end of the transient.
@@ -58,6 +67,9 @@ impact in that cycle); cycle counts from 0 at the end of the transient.
   snap_throughs,sticks
 (x0, v0: the fixed point at plate phase 0; cycle_max: the largest x of each of
 its cycles, ';'-separated).
+",
+    crate::bifurcations::help!(),
+    "
 
 Exit codes: 0 success; 2 invalid options; 1 a file could not be written or a
 simulation failed.
@@ -66,7 +78,8 @@ Examples:
   bistable bifurcation --param omega --range 2.0:2.7:141 --velocity 0.07 \\
       --out out/bif.csv --plot out/bif.png
   bistable bifurcation --param velocity --range 0.01:0.2:200 --omega 0.85 \\
-      --plot out/bif_v.png";
+      --plot out/bif_v.png"
+);
 
 /// The control parameter.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, ValueEnum, Serialize)]
@@ -165,6 +178,8 @@ struct Summary {
     lanes: usize,
     points: Vec<PointSummary>,
     branches: Vec<OrbitCount>,
+    /// The bifurcation points located on the branches (`--param omega` only).
+    bifurcations: Vec<bifurcations::PointReport>,
     wall_time_s: f64,
     files: Vec<PathBuf>,
 }
@@ -205,15 +220,31 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
     let Bifurcation {
         points, branches, ..
     } = data;
+    let found: Vec<BifurcationPoint> = match args.param {
+        Param::Omega => {
+            let on: Vec<Branch> = branches
+                .iter()
+                .flat_map(|b| Branch::from_natural(&models, b))
+                .collect();
+            locate(&on, threads, &mut |p| bars.report(p))?
+        }
+        Param::Velocity => Vec::new(),
+    };
 
     let mut files = Vec::new();
     if let Some(path) = &args.grid.out {
         files.extend(write_csv(path, &models, &points, &branches)?);
+        if args.param == Param::Omega {
+            files.push(bifurcations::write_csv(
+                &sibling(path, "_bifurcations.csv"),
+                &found,
+            )?);
+        }
     }
     let xs: Vec<f64> = range.values();
     if let Some(path) = &args.grid.plot {
         plot::png(path, (1500, 1250), |root| {
-            draw(root, args, &models, &xs, &points, &branches)
+            draw(root, args, &models, &xs, &points, &branches, &found)
         })?;
         files.push(path.clone());
     }
@@ -242,13 +273,14 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
                 links: b.links.len(),
             })
             .collect(),
+        bifurcations: bifurcations::reports(&found),
         wall_time_s: start.elapsed().as_secs_f64(),
         files,
     };
     if args.model.json {
         print_json(&summary)
     } else {
-        print_text(&human(&summary))
+        print_text(&human(&summary, &found))
     }
 }
 
@@ -322,7 +354,7 @@ fn write_csv(
     Ok(files)
 }
 
-fn human(s: &Summary) -> String {
+fn human(s: &Summary, found: &[BifurcationPoint]) -> String {
     let mut text = format!(
         "bifurcation diagram over {} = {} ({} transient + {} recorded shaker periods per \
          point, {:.1} s)\n",
@@ -363,6 +395,10 @@ fn human(s: &Summary) -> String {
             b.period, b.orbits, b.stable, b.links
         ));
     }
+    if !found.is_empty() {
+        text.push_str("  bifurcation points on the branches:\n");
+        text.push_str(&bifurcations::human(found));
+    }
     for f in &s.files {
         text.push_str(&format!("wrote {}\n", f.display()));
     }
@@ -393,6 +429,7 @@ fn draw(
     xs: &[f64],
     points: &[Cycles],
     branches: &[Branches],
+    found: &[BifurcationPoint],
 ) -> DrawResult {
     let m0 = &models[0];
     let (pname, xdesc, fixed) = match args.param {
@@ -478,6 +515,7 @@ fn draw(
     if barrier {
         legend.push((Mark::Dashed(BARRIER), "barrier x = ½".to_string()));
     }
+    legend.extend(bifurcations::legend(found));
     let area = header(
         root,
         &format!(
@@ -523,6 +561,7 @@ fn draw(
     for b in branches {
         branches::draw(&mut chart, b, xs, period_colour(b.period))?;
     }
+    bifurcations::draw(&mut chart, found)?;
     let mut chart = plot::chart(
         &lower,
         (x0, x1),

@@ -21,8 +21,11 @@
 //! - `map.rs`: `bistable map`;
 //! - `basins.rs`: `bistable basins`;
 //! - `branches.rs`: periodic-orbit branches as CSV rows and curves on a chart;
+//! - `bifurcations.rs`: bifurcation points located on the branches as CSV rows, JSON and
+//!   markers;
 //! - `bifurcation.rs`: `bistable bifurcation`;
 //! - `orbit.rs`: `bistable orbit`;
+//! - `atlas.rs`: `bistable atlas`;
 //! - `thresholds.rs`: `bistable thresholds`;
 //! - `energy_map.rs`: `bistable energy-map`;
 //! - `spectrum.rs`: `bistable spectrum`.
@@ -31,8 +34,10 @@
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
 //! Result<(), CliError>`, then add a variant to [`Command`] and a line to [`main`].
 
+mod atlas;
 mod basins;
 mod bifurcation;
+mod bifurcations;
 mod branches;
 mod classify;
 mod common;
@@ -105,6 +110,11 @@ enum Command {
     #[command(long_about = orbit::LONG_ABOUT, after_help = orbit::AFTER_HELP)]
     Orbit(orbit::OrbitArgs),
 
+    /// Fold and period-doubling curves in (Ω, V), continued from the points located on the
+    /// orbit branches at one V.
+    #[command(long_about = atlas::LONG_ABOUT, after_help = atlas::AFTER_HELP)]
+    Atlas(atlas::AtlasArgs),
+
     /// Energy change per impact ΔK/ΔK0 over impact phase and pre-impact velocity (Eq. 13–15),
     /// optionally with a simulation's impacts.
     #[command(long_about = energy_map::LONG_ABOUT, after_help = energy_map::AFTER_HELP)]
@@ -129,6 +139,7 @@ fn main() -> ExitCode {
         Command::Basins(args) => basins::run(args),
         Command::Bifurcation(args) => bifurcation::run(args),
         Command::Orbit(args) => orbit::run(args),
+        Command::Atlas(args) => atlas::run(args),
         Command::Thresholds(args) => thresholds::run(args),
         Command::EnergyMap(args) => energy_map::run(args),
         Command::Spectrum(args) => spectrum::run(args),

@@ -7,15 +7,17 @@ use clap::Args;
 use plotters::prelude::*;
 use serde::Serialize;
 
+use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::cycles::settled;
 use bistable_analysis::orbit::{shoot, summarise};
 use bistable_analysis::Model;
 
+use crate::bifurcations;
 use crate::branches;
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
-use crate::output::{print_json, print_text, CsvFile, Field};
+use crate::output::{print_json, print_text, sibling, CsvFile, Field};
 use crate::plot::{self, header, Area, DrawResult, Mark};
 use crate::progress::StageBars;
 use crate::ranges::{Pair, Range};
@@ -44,10 +46,19 @@ continuation cannot turn around); with --arclength the branches are followed
 through folds by pseudo-arclength continuation (unknowns x, x', Ω; tangent from
 [M − I | ∂P/∂Ω]), which shows the unstable middle branch of a hysteresis loop.
 --plot draws the largest displacement of the orbits against Ω: stable thick and
-solid, unstable thin and dashed.";
+solid, unstable thin and dashed.
+
+Bifurcation points: between consecutive orbits of every branch, a change of the
+impacts per period (grazing) or of sticking is located by bisection, and a sign
+change of det(M − I) (fold), det(M + I) (period doubling) or det M − 1 with a
+complex pair (Neimark–Sacker) by regula falsi along the branch, re-solving the
+orbit by shooting at each trial (Ω to 1e-12 where the test function is smooth).
+They are listed in the summary, drawn as markers (one legend entry per kind) and
+written to <stem>_bifurcations.csv beside --out.";
 
 /// Shown after the options by `bistable orbit --help`.
-pub const AFTER_HELP: &str = "\
+pub const AFTER_HELP: &str = concat!(
+    "\
 JSON (one orbit): omega, velocity, period, x0, v0 (fixed point at plate phase 0),
 multipliers [{re, im, abs}], max_abs_multiplier, stable, floquet_exponent
 (ln|λ|max/(pT), per unit of τ), impacts, sticks, snap_throughs, max_x,
@@ -62,6 +73,10 @@ CSV (--out, with --continue-omega): one row per orbit, as the _orbits.csv of
 The JSON summary gives per V the orbits, the stable ones, the Ω covered, and
 with --arclength the traces and their folds (turning points in Ω).
 
+",
+    crate::bifurcations::help!(),
+    "
+
 Exit codes: 0 success; 2 invalid options; 1 Newton failed, a simulation failed
 or a file could not be written.
 
@@ -70,7 +85,10 @@ Examples:
   bistable orbit --omega 2.2 --velocity 0.07 --period 2 --json
   bistable orbit --omega 2.2 --velocity 0.07 --guess 0.05,0.1
   bistable orbit --continue-omega 0.6:3.0:121 --velocity 0.03,0.05,0.07 \\
-      --arclength --plot out/orbits.png --out out/orbits.csv";
+      --arclength --plot out/orbits.png --out out/orbits.csv
+  bistable orbit --continue-omega 2.05:2.25:41 --velocity 0.07 --period 2 \\
+      --out out/p2.csv    # and out/p2_bifurcations.csv: the P-2 → P-4 doubling"
+);
 
 /// Options of `bistable orbit`.
 #[derive(Debug, Clone, Args)]
@@ -130,7 +148,8 @@ pub struct OrbitArgs {
     )]
     pub plot: Option<PathBuf>,
 
-    /// Write the continued orbits to FILE.csv.
+    /// Write the continued orbits to FILE.csv and the bifurcation points located on them to
+    /// <stem>_bifurcations.csv beside it.
     #[arg(
         long,
         value_name = "FILE.csv",
@@ -355,6 +374,8 @@ struct ContinuationSummary {
     method: &'static str,
     omega_range: String,
     branches: Vec<BranchSummary>,
+    /// The bifurcation points located on the branches, for every V in order.
+    bifurcations: Vec<bifurcations::PointReport>,
     files: Vec<PathBuf>,
 }
 
@@ -374,6 +395,7 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
         Method::Natural
     };
     let mut all: Vec<(f64, Curves)> = Vec::new();
+    let mut found: Vec<BifurcationPoint> = Vec::new();
     for &v in &args.velocity {
         let models = omegas
             .iter()
@@ -383,16 +405,25 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
         let curves = continue_orbits(&models, p, args.settle, method, threads, width, &mut |r| {
             bars.report(r)
         })?;
+        let on = match &curves {
+            Curves::Natural(b) => Branch::from_natural(&models, b),
+            Curves::Arclength(t) => Branch::from_traces(&models[0], p, t),
+        };
+        found.extend(locate(&on, threads, &mut |r| bars.report(r))?);
         all.push((v, curves));
     }
     let mut files = Vec::new();
     if let Some(path) = &args.out {
         files.push(write_continuation_csv(path, &all)?);
+        files.push(bifurcations::write_csv(
+            &sibling(path, "_bifurcations.csv"),
+            &found,
+        )?);
     }
     if let Some(path) = &args.plot {
         let model = args.model.model(range.start, args.velocity[0])?;
         plot::png(path, (1400, 950), |root| {
-            draw(root, &model, p, args.arclength, &omegas, &all)
+            draw(root, &model, p, args.arclength, &omegas, &all, &found)
         })?;
         files.push(path.clone());
     }
@@ -408,6 +439,7 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
             .iter()
             .map(|(v, c)| branch_summary(*v, c, &omegas))
             .collect(),
+        bifurcations: bifurcations::reports(&found),
         files,
     };
     if args.model.json {
@@ -430,6 +462,10 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
                 _ => String::new(),
             }
         ));
+    }
+    if !found.is_empty() {
+        text.push_str("bifurcation points:\n");
+        text.push_str(&bifurcations::human(&found));
     }
     for f in &summary.files {
         text.push_str(&format!("wrote {}\n", f.display()));
@@ -536,6 +572,7 @@ fn draw(
     arc: bool,
     omegas: &[f64],
     all: &[(f64, Curves)],
+    found: &[BifurcationPoint],
 ) -> DrawResult {
     let mut legend: Vec<(Mark, String)> = all
         .iter()
@@ -550,13 +587,7 @@ fn draw(
     if barrier {
         legend.push((Mark::Dashed(BARRIER), "barrier x = ½".to_string()));
     }
-    let grazing: Vec<(f64, f64)> = all.iter().flat_map(|(_, c)| grazing_points(c)).collect();
-    if !grazing.is_empty() {
-        legend.push((
-            Mark::Ring(GRAZING, 5),
-            "impacts per period change (grazing)".to_string(),
-        ));
-    }
+    legend.extend(bifurcations::legend(found));
     let area = header(
         root,
         &format!(
@@ -598,28 +629,5 @@ fn draw(
             }
         }
     }
-    chart.draw_series(
-        grazing
-            .iter()
-            .map(|&p| Circle::new(p, 5, GRAZING.stroke_width(2))),
-    )?;
-    Ok(())
-}
-
-/// Colour of the marks where the impacts per period change along a trace.
-const GRAZING: RGBColor = RGBColor(30, 30, 30);
-
-/// `(Ω, x_max)` of every traced orbit whose number of impacts differs from the one before it on
-/// its trace: the branch crossed a grazing contact there (an impact appeared or vanished), where
-/// it has a kink and can turn steeply.
-fn grazing_points(c: &Curves) -> Vec<(f64, f64)> {
-    let Curves::Arclength(traces) = c else {
-        return Vec::new();
-    };
-    traces
-        .iter()
-        .flat_map(|t| t.windows(2))
-        .filter(|w| w[0].impacts != w[1].impacts)
-        .map(|w| (w[1].omega, w[1].max_x))
-        .collect()
+    bifurcations::draw(&mut chart, found)
 }

@@ -99,6 +99,7 @@ impl StageBars {
                 Stage::Simulating => format!("simulating {} points{}", p.total, self.context),
                 Stage::Shooting => format!("shooting from {} seeds", p.total),
                 Stage::Continuing => "continuing the orbits".to_string(),
+                Stage::Locating => format!("locating bifurcations in {} intervals", p.total),
             };
             self.current = Some((p.stage, Progress::new(p.total as f64, label)));
         }

@@ -1079,3 +1079,112 @@ fn every_analysis_has_help() {
         assert!(text.contains(needle), "{cmd} --help lacks '{needle}'");
     }
 }
+
+#[test]
+fn orbit_continuation_locates_the_fig6_period_doubling() {
+    let dir = scratch("bifurcations");
+    let (csv, png) = (dir.join("p1.csv"), dir.join("p1.png"));
+    let c = json(&[
+        "orbit",
+        "--continue-omega",
+        "2.05:2.25:41",
+        "--velocity",
+        "0.07",
+        "--out",
+        s(&csv),
+        "--plot",
+        s(&png),
+        "--json",
+    ]);
+    assert_png(&png);
+    let points = c["bifurcations"].as_array().unwrap();
+    assert_eq!(points.len(), 1, "{c}");
+    let p = &points[0];
+    assert_eq!(p["kind"], "period_doubling");
+    assert_eq!(p["period"], 1);
+    let omega = p["omega"].as_f64().unwrap();
+    assert!(2.12 < omega && omega < 2.13, "{p}");
+    assert!(p["omega_error"].as_f64().unwrap() <= 1e-12, "{p}");
+    let lambda = p["multipliers"][0]["re"].as_f64().unwrap();
+    assert!((lambda + 1.0).abs() < 1e-8, "{p}");
+    // The same point in the CSV beside --out.
+    let rows = csv_rows(&dir.join("p1_bifurcations.csv"));
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0]["kind"], "period_doubling");
+    assert_eq!(rows[0]["omega"].parse::<f64>().unwrap(), omega);
+    assert_eq!(rows[0]["impacts_before"], "1");
+    // `bifurcation` finds it on its P-1 branch too, and the P-2 → P-4 doubling.
+    let b = json(&[
+        "bifurcation",
+        "--param",
+        "omega",
+        "--range",
+        "2.05:2.25:41",
+        "--velocity",
+        "0.07",
+        "--branch-periods",
+        "1,2",
+        "--json",
+    ]);
+    let kinds: Vec<(u64, f64)> = b["bifurcations"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|p| p["kind"] == "period_doubling")
+        .map(|p| (p["period"].as_u64().unwrap(), p["omega"].as_f64().unwrap()))
+        .collect();
+    assert_eq!(kinds.len(), 2, "{b}");
+    assert!((kinds[0].1 - omega).abs() < 1e-10, "{kinds:?}");
+    assert_eq!(kinds[1].0, 2);
+    assert!(2.23 < kinds[1].1 && kinds[1].1 < 2.24, "{kinds:?}");
+}
+
+#[test]
+fn atlas_continues_the_fig6_period_doubling_in_omega_and_v() {
+    let dir = scratch("atlas");
+    let csv = dir.join("pd.csv");
+    let c = json(&[
+        "atlas",
+        "--continue-omega",
+        "2.05:2.25:41",
+        "--velocity",
+        "0.07",
+        "--velocity-bounds",
+        "0.065,0.075",
+        "--out",
+        s(&csv),
+        "--json",
+    ]);
+    let curves = c["curves"].as_array().unwrap();
+    assert_eq!(curves.len(), 1, "{c}");
+    assert_eq!(curves[0]["kind"], "period_doubling");
+    let rows = csv_rows(&csv);
+    assert_eq!(rows.len() as u64, curves[0]["points"].as_u64().unwrap());
+    let f = |r: &std::collections::HashMap<String, String>, k: &str| r[k].parse::<f64>().unwrap();
+    for r in &rows {
+        assert!((f(r, "multiplier_1_re") + 1.0).abs() < 1e-8, "{r:?}");
+    }
+    // From the lower V bound, 0.065 (at Ω ≈ 2.19), to where Ω leaves the grid at 2.05 (at
+    // V ≈ 0.074): Ω decreases as V grows.
+    let (first, last) = (&rows[0], &rows[rows.len() - 1]);
+    assert!(
+        f(first, "velocity") < 0.0655 && f(first, "velocity") > 0.064,
+        "{first:?}"
+    );
+    assert!(
+        f(last, "omega") < 2.05 && f(last, "velocity") > 0.074,
+        "{last:?}"
+    );
+    // Bounds that do not contain --velocity are refused, naming the option.
+    let o = bistable(&[
+        "atlas",
+        "--continue-omega",
+        "2.05:2.25:41",
+        "--velocity",
+        "0.07",
+        "--velocity-bounds",
+        "0.08,0.09",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--velocity-bounds"), "{}", stderr(&o));
+}

@@ -5,6 +5,7 @@ use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
 use bistable_analysis::arclength::ArcPoint;
+use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch, Kind};
 use bistable_analysis::branches::Branches;
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::cycles::settled;
@@ -211,6 +212,59 @@ fn arc_rows(all: &[(f64, Vec<Vec<ArcPoint>>)]) -> Vec<(&'static str, &'static st
         .collect()
 }
 
+/// The bifurcation points, one row each: the columns of the CLI's `_bifurcations.csv`, with
+/// `kind` as its index in `Kind::ALL` (the Python side names it).
+fn bifurcation_rows(points: &[BifurcationPoint]) -> Vec<(&'static str, &'static str, Col)> {
+    let mut c: [Col; 18] = Default::default();
+    for p in points {
+        let m = p.multipliers;
+        let kind = Kind::ALL.iter().position(|&k| k == p.kind).unwrap_or(0);
+        c[0].i(kind as i64);
+        c[1].f(p.omega);
+        c[2].f(p.velocity);
+        c[3].i(i64::from(p.period));
+        c[4].f(p.x0);
+        c[5].f(p.v0);
+        c[6].f(p.max_x);
+        c[7].f(m[0].0);
+        c[8].f(m[0].1);
+        c[9].f(m[1].0);
+        c[10].f(m[1].1);
+        c[11].f(p.omega_error);
+        c[12].i(p.branch as i64);
+        c[13].i(p.index as i64);
+        c[14].i(p.impacts_before as i64);
+        c[15].i(p.impacts_after as i64);
+        c[16].b(p.sticks_before);
+        c[17].b(p.sticks_after);
+    }
+    let names = [
+        ("kind", "i8"),
+        ("omega", "f8"),
+        ("velocity", "f8"),
+        ("period", "i8"),
+        ("x0", "f8"),
+        ("v0", "f8"),
+        ("max_x", "f8"),
+        ("multiplier_1_re", "f8"),
+        ("multiplier_1_im", "f8"),
+        ("multiplier_2_re", "f8"),
+        ("multiplier_2_im", "f8"),
+        ("omega_error", "f8"),
+        ("branch", "i8"),
+        ("index", "i8"),
+        ("impacts_before", "i8"),
+        ("impacts_after", "i8"),
+        ("sticks_before", "b1"),
+        ("sticks_after", "b1"),
+    ];
+    names
+        .into_iter()
+        .zip(c)
+        .map(|((n, t), c)| (n, t, c))
+        .collect()
+}
+
 /// Orbits continued in Ω (see `bistable_impact.continue_omega`).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, period=1, settle=2000, method="natural", threads=0,
@@ -262,20 +316,29 @@ pub(crate) fn continue_omega<'py>(
             .collect::<PyResult<Vec<_>>>()?;
         grids.push(ms);
     }
-    let curves: Vec<Curves> = released(
+    let results: Vec<(Curves, Vec<BifurcationPoint>)> = released(
         py,
         || {
             grids
                 .iter()
                 .map(|ms| {
-                    continue_orbits(ms, period, settle, method, threads, width, &mut |_| {
-                        check_signals()
-                    })
+                    let c =
+                        continue_orbits(ms, period, settle, method, threads, width, &mut |_| {
+                            check_signals()
+                        })?;
+                    let on = match &c {
+                        Curves::Natural(b) => Branch::from_natural(ms, b),
+                        Curves::Arclength(t) => Branch::from_traces(&ms[0], period, t),
+                    };
+                    let found = locate(&on, threads, &mut |_| check_signals())?;
+                    Ok((c, found))
                 })
                 .collect::<Result<Vec<_>, Stop>>()
         },
         |e| e.into_py(py),
     )?;
+    let found: Vec<BifurcationPoint> = results.iter().flat_map(|r| r.1.clone()).collect();
+    let curves: Vec<Curves> = results.into_iter().map(|r| r.0).collect();
 
     let out = PyDict::new(py);
     out.set_item("period", period)?;
@@ -298,6 +361,7 @@ pub(crate) fn continue_omega<'py>(
         branches.append(b)?;
     }
     out.set_item("branches", branches)?;
+    out.set_item("bifurcations", table(py, bifurcation_rows(&found))?)?;
     match method {
         Method::Natural => {
             let all: Vec<Branches> = curves

@@ -221,6 +221,12 @@ pub(crate) enum Mark {
     Dashed(RGBColor),
     Dot(RGBColor, i32),
     Ring(RGBColor, i32),
+    /// A filled square (12 px).
+    Square(RGBColor),
+    /// A filled triangle.
+    Triangle(RGBColor),
+    /// A cross.
+    Cross(RGBColor),
     Band(RGBColor),
     /// A line with a dark halo, `dash` = (on, off) pixels or solid.
     Halo(RGBColor, Option<(i32, i32)>),
@@ -311,6 +317,12 @@ fn draw_mark(area: &Area<'_>, mark: Mark, x: i32, y: i32) -> DrawResult {
         }
         Mark::Dot(c, r) => area.draw(&Circle::new((x + 15, y), r, c.filled()))?,
         Mark::Ring(c, r) => area.draw(&Circle::new((x + 15, y), r, c.stroke_width(2)))?,
+        Mark::Square(c) => area.draw(&Rectangle::new(
+            [(x + 9, y - 6), (x + 21, y + 6)],
+            c.filled(),
+        ))?,
+        Mark::Triangle(c) => area.draw(&TriangleMarker::new((x + 15, y), 8, c.filled()))?,
+        Mark::Cross(c) => area.draw(&Cross::new((x + 15, y), 7, c.stroke_width(3)))?,
         Mark::Band(c) => area.draw(&Rectangle::new(
             [(x + 2, y - 8), (x + 28, y + 8)],
             c.mix(0.35).filled(),

@@ -85,6 +85,8 @@ def outcomes_from_text(text: str, runs: int) -> List[Outcome]: ...
 
 # The analyses (see bistable_impact.analyses for the keys and units). Tables come as lists of
 # Column; "orbits" tables have a separate "cycle_max" list of lists (None for arclength).
+# continue_omega's "bifurcations" table has "kind" as an 'i8' code: the index in
+# ("fold", "period_doubling", "neimark_sacker", "grazing", "sticking").
 def orbit(
     omega: float,
     velocity: float,

@@ -32,6 +32,26 @@ ARC_COLUMNS = (
     "multiplier_1_im", "multiplier_2_re", "multiplier_2_im", "abs_multiplier", "impacts",
 )  # fmt: skip
 
+#: Columns of ``continue_omega(...)['bifurcations']`` (the CLI's ``_bifurcations.csv``).
+BIFURCATION_COLUMNS = (
+    "kind", "omega", "velocity", "period", "x0", "v0", "max_x", "multiplier_1_re",
+    "multiplier_1_im", "multiplier_2_re", "multiplier_2_im", "omega_error", "branch", "index",
+    "impacts_before", "impacts_after", "sticks_before", "sticks_after",
+)  # fmt: skip
+
+#: ``kind`` of the bifurcation points, by the code the native module uses.
+_BIFURCATION_KINDS = np.array(
+    ["fold", "period_doubling", "neimark_sacker", "grazing", "sticking"], dtype=object
+)
+
+
+def _bifurcations_frame(raw: Dict[str, Any]):
+    """The bifurcation points as a DataFrame, ``kind`` as words."""
+    df = Table(raw.pop("bifurcations")).to_pandas()
+    df["kind"] = _BIFURCATION_KINDS[df["kind"].to_numpy()]
+    return df
+
+
 def _orbits_frame(raw: Dict[str, Any]):
     """The orbits table with its ``cycle_max`` lists, in the CSV's column order."""
     df = Table(raw.pop("orbits")).to_pandas()
@@ -120,9 +140,19 @@ def continue_omega(
 
     Returns the CLI's JSON keys ``period, method ('natural'|'pseudo-arclength'), omega_range
     ('A:B:N'), branches`` (per ``V``: ``velocity, orbits, stable, omega_min, omega_max,
-    traces, folds``; the last two None for natural continuation) and ``orbits``: a DataFrame
+    traces, folds``; the last two None for natural continuation), ``orbits``: a DataFrame
     with the CLI's ``--out`` CSV columns (:data:`ORBIT_COLUMNS`, one row per orbit, for natural
-    continuation; :data:`ARC_COLUMNS`, one row per trace point, for arclength).
+    continuation; :data:`ARC_COLUMNS`, one row per trace point, for arclength), and
+    ``bifurcations``: a DataFrame with the columns of the CLI's ``_bifurcations.csv``
+    (:data:`BIFURCATION_COLUMNS`), one row per bifurcation point located between consecutive
+    orbits of a branch: ``kind`` (``'fold'``: a Floquet multiplier through +1,
+    ``'period_doubling'``: through −1, ``'neimark_sacker'``: a complex pair through the unit
+    circle, ``'grazing'``: the impacts per period change, ``'sticking'``: sticking starts or
+    stops), ``omega`` and its error bound ``omega_error`` (1e-12 for the smooth kinds, located
+    by regula falsi on ``det(M − I)``, ``det(M + I)``, ``det M − 1``; 1e-10 for grazing and
+    sticking, by bisection, when converged), the orbit there (``x0, v0, max_x``, multipliers),
+    the ``branch`` and ``index`` of the interval, and the impacts and sticking on either side.
+    Natural continuation stops at folds, so folds are found with ``method='arclength'``.
 
     Args:
         omega: the grid of ``Ω`` (> 0), evenly spaced (e.g. :func:`bistable_impact.linspace`).
@@ -151,6 +181,7 @@ def continue_omega(
         **m,
     )
     d["orbits"] = _orbits_frame(d)
+    d["bifurcations"] = _bifurcations_frame(d)
     return d
 
 

@@ -1,0 +1,356 @@
+//! Two-parameter curves: a located fold or period-doubling point of a `p`-periodic orbit
+//! continued in `(Ω, V)`.
+//!
+//! Unknowns `w = (x, x', Ω, V)`; equations `P(x, x'; Ω, V) − (x, x') = 0` (the orbit) and
+//! `h = det(M − I) = 0` (fold) or `det(M + I) = 0` (period doubling), with `M` the monodromy
+//! matrix from the variational equations; pseudo-arclength in `w` with the tangent the null
+//! vector of the 3×4 Jacobian (`M − I` exactly, the other entries by central differences).
+//! A curve ends where the impacts per period or sticking change (the conditions are not
+//! smooth there), where the corrector fails at a step 1e-4 of the largest, outside the bounds
+//! or after `max_points`.
+
+use bistable_core::shooting::eigenvalues;
+use bistable_core::SimError;
+
+use crate::arclength::period_map;
+use crate::bifurcations::{BifurcationPoint, Kind};
+use crate::Model;
+
+/// Relative step of the central differences.
+const FD: f64 = 1e-6;
+/// Newton on the augmented system stops at this max-norm of `(P(y) − y, h)`.
+const RESIDUAL: f64 = 1e-11;
+
+/// One point of a two-parameter curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurvePoint {
+    /// `Ω`.
+    pub omega: f64,
+    /// `V` (units of `ω0·Δx`).
+    pub velocity: f64,
+    /// Fixed point `x` at plate phase 0 (units of `Δx`).
+    pub x0: f64,
+    /// Its velocity `x'` (units of `ω0·Δx`).
+    pub v0: f64,
+    /// Floquet multipliers `(re, im)`, largest modulus first (one at +1 or −1).
+    pub multipliers: [(f64, f64); 2],
+    /// Impacts per orbit.
+    pub impacts: u64,
+}
+
+/// Settings of a two-parameter curve.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CurveOptions {
+    /// Stop once Ω leaves `(lo, hi)`.
+    pub omega_bounds: (f64, f64),
+    /// Stop once V leaves `(lo, hi)` (`lo >= 0`).
+    pub velocity_bounds: (f64, f64),
+    /// Largest step along the curve (Euclidean in `(x, x', Ω, V)`), > 0.
+    pub ds_max: f64,
+    /// Most points in each direction from the start.
+    pub max_points: usize,
+}
+
+/// Why a curve cannot start.
+#[derive(Debug, Clone, PartialEq)]
+pub enum CurveError {
+    /// Only folds and period doublings have a curve here.
+    Kind(Kind),
+    /// The start does not solve the augmented system (residual reached).
+    Start(f64),
+    /// A simulation failed.
+    Sim(SimError),
+}
+
+impl std::fmt::Display for CurveError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            CurveError::Kind(k) => write!(
+                f,
+                "only fold and period_doubling points can be continued, not {}",
+                k.name()
+            ),
+            CurveError::Start(r) => write!(
+                f,
+                "the start point does not solve the bifurcation condition (residual {r:e})"
+            ),
+            CurveError::Sim(e) => e.fmt(f),
+        }
+    }
+}
+
+impl std::error::Error for CurveError {}
+
+impl From<SimError> for CurveError {
+    fn from(e: SimError) -> Self {
+        CurveError::Sim(e)
+    }
+}
+
+/// The augmented system of one curve.
+struct System<'a> {
+    model: &'a Model,
+    period: u32,
+    /// +1 for a fold (`det(M − I)`), −1 for a period doubling (`det(M + I)`).
+    sign: f64,
+}
+
+/// `Φ(w) = (P(y) − y, h)` with `M`, impacts and sticking.
+type Value = ([f64; 3], [[f64; 2]; 2], u64, bool);
+
+impl System<'_> {
+    fn value(&self, w: [f64; 4]) -> Result<Value, SimError> {
+        let m = self.model.at(w[2], w[3])?;
+        let (py, mm, impacts, sticks) = period_map(&m, w[2], self.period, [w[0], w[1]], true)?;
+        let s = self.sign;
+        let h = (mm[0][0] - s) * (mm[1][1] - s) - mm[0][1] * mm[1][0];
+        Ok(([py[0] - w[0], py[1] - w[1], h], mm, impacts, sticks))
+    }
+
+    /// `Φ(w)`, its 3×4 Jacobian, `M`, impacts and sticking.
+    #[allow(clippy::type_complexity)]
+    fn jacobian(&self, w: [f64; 4]) -> Result<([f64; 3], [[f64; 4]; 3], Value), SimError> {
+        let v = self.value(w)?;
+        let mut jac = [[0.0; 4]; 3];
+        for k in 0..4 {
+            let d = FD * w[k].abs().max(if k < 2 { 0.1 } else { 1.0 }).max(1e-3);
+            let (mut plus, mut minus) = (w, w);
+            plus[k] += d;
+            minus[k] -= d;
+            let (fp, ..) = self.value(plus)?;
+            let (fm, ..) = self.value(minus)?;
+            for (r, row) in jac.iter_mut().enumerate() {
+                row[k] = (fp[r] - fm[r]) / (2.0 * d);
+            }
+        }
+        // The orbit's rows in x and x' exactly: M − I.
+        let mm = v.1;
+        jac[0][0] = mm[0][0] - 1.0;
+        jac[0][1] = mm[0][1];
+        jac[1][0] = mm[1][0];
+        jac[1][1] = mm[1][1] - 1.0;
+        Ok((v.0, jac, v))
+    }
+
+    /// Newton from `pred` with the arclength condition `t·(w − pred) = 0`: the point, its
+    /// value and its Jacobian.
+    #[allow(clippy::type_complexity)]
+    fn correct(&self, pred: [f64; 4], t: [f64; 4]) -> Option<([f64; 4], Value, [[f64; 4]; 3])> {
+        let mut w = pred;
+        for _ in 0..12 {
+            let (f, jac, v) = self.jacobian(w).ok()?;
+            if f.iter().all(|c| c.abs() <= RESIDUAL) {
+                return Some((w, v, jac));
+            }
+            let arc: f64 = (0..4).map(|k| t[k] * (w[k] - pred[k])).sum();
+            let d = solve4([jac[0], jac[1], jac[2], t], [-f[0], -f[1], -f[2], -arc])?;
+            for k in 0..4 {
+                w[k] += d[k];
+            }
+            if w[2] <= 0.0 || w[3] < 0.0 || w.iter().any(|c| !c.is_finite()) {
+                return None;
+            }
+        }
+        None
+    }
+}
+
+/// Unit null vector of the 3×4 Jacobian, oriented along `along` (its product with it
+/// positive).
+fn tangent(jac: [[f64; 4]; 3], along: [f64; 4]) -> Option<[f64; 4]> {
+    let t = solve4([jac[0], jac[1], jac[2], along], [0.0, 0.0, 0.0, 1.0])?;
+    let n = t.iter().map(|c| c * c).sum::<f64>().sqrt();
+    (n.is_finite() && n > 0.0).then(|| t.map(|c| c / n))
+}
+
+/// Solves the 4×4 system `a·x = b` by Gaussian elimination with partial pivoting.
+fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
+    for col in 0..4 {
+        let piv = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
+        if a[piv][col] == 0.0 || !a[piv][col].is_finite() {
+            return None;
+        }
+        a.swap(col, piv);
+        b.swap(col, piv);
+        let pivot_row = a[col];
+        for row in col + 1..4 {
+            let f = a[row][col] / pivot_row[col];
+            for (k, entry) in a[row].iter_mut().enumerate().skip(col) {
+                *entry -= f * pivot_row[k];
+            }
+            b[row] -= f * b[col];
+        }
+    }
+    let mut x = [0.0; 4];
+    for row in (0..4).rev() {
+        let s: f64 = (row + 1..4).map(|k| a[row][k] * x[k]).sum();
+        x[row] = (b[row] - s) / a[row][row];
+    }
+    x.iter().all(|v| v.is_finite()).then_some(x)
+}
+
+fn curve_point(w: [f64; 4], v: &Value) -> CurvePoint {
+    CurvePoint {
+        omega: w[2],
+        velocity: w[3],
+        x0: w[0],
+        v0: w[1],
+        multipliers: eigenvalues(v.1),
+        impacts: v.2,
+    }
+}
+
+/// Continues the fold or period-doubling point `start` (located on a branch at `model`'s
+/// parameters; `model`: any model of that branch) in `(Ω, V)`: the curve from its low-V end
+/// to its high-V end (or as far as it goes each way), the start among its points.
+pub fn continue_point(
+    model: &Model,
+    start: &BifurcationPoint,
+    o: CurveOptions,
+) -> Result<Vec<CurvePoint>, CurveError> {
+    let sign = match start.kind {
+        Kind::Fold => 1.0,
+        Kind::PeriodDoubling => -1.0,
+        k => return Err(CurveError::Kind(k)),
+    };
+    let sys = System {
+        model,
+        period: start.period,
+        sign,
+    };
+    // Polish the start at its V (the arclength condition fixes V).
+    let w0 = [start.x0, start.v0, start.omega, start.velocity];
+    let Some((w0, v0, jac0)) = sys.correct(w0, [0.0, 0.0, 0.0, 1.0]) else {
+        let r = sys
+            .value(w0)
+            .map(|(f, ..)| f.iter().fold(0.0_f64, |a, c| a.max(c.abs())))?;
+        return Err(CurveError::Start(r));
+    };
+    let side = (v0.2, v0.3);
+    let mut halves: Vec<Vec<CurvePoint>> = Vec::new();
+    for dir in [-1.0, 1.0] {
+        let mut pts = Vec::new();
+        let Some(mut t) = tangent(jac0, [0.0, 0.0, 0.0, dir]) else {
+            halves.push(pts);
+            continue;
+        };
+        let mut w = w0;
+        let mut ds = 0.25 * o.ds_max;
+        while pts.len() < o.max_points && ds >= 1e-4 * o.ds_max {
+            let pred = [0, 1, 2, 3].map(|k| w[k] + ds * t[k]);
+            let next = sys.correct(pred, t).and_then(|(wn, v, jac)| {
+                let step = (0..4).map(|k| (wn[k] - w[k]).powi(2)).sum::<f64>().sqrt();
+                let tn = tangent(jac, t)?;
+                let turn: f64 = (0..4).map(|k| tn[k] * t[k]).sum();
+                (step <= 2.0 * ds && turn > 0.5 && (v.2, v.3) == side).then_some((wn, v, tn))
+            });
+            match next {
+                Some((wn, v, tn)) => {
+                    w = wn;
+                    t = tn;
+                    pts.push(curve_point(w, &v));
+                    let inside = |x: f64, (lo, hi): (f64, f64)| x > lo && x < hi;
+                    if !(inside(w[2], o.omega_bounds) && inside(w[3], o.velocity_bounds)) {
+                        break;
+                    }
+                    ds = (1.5 * ds).min(o.ds_max);
+                }
+                None => ds *= 0.5,
+            }
+        }
+        halves.push(pts);
+    }
+    let mut out: Vec<CurvePoint> = halves[0].iter().rev().copied().collect();
+    out.push(curve_point(w0, &v0));
+    out.extend(halves[1].iter().copied());
+    Ok(out)
+}
+
+/// Whether the bifurcation point `p` lies on `curve` (within `tol` of one of its segments,
+/// Euclidean in `(x, x', Ω, V)`), with the same kind and period as `curve` was traced for:
+/// a second start on a curve already traced (one that turns in V meets V again).
+pub fn covers(curve: &[CurvePoint], p: &BifurcationPoint, tol: f64) -> bool {
+    let u = [p.x0, p.v0, p.omega, p.velocity];
+    let w = |c: &CurvePoint| [c.x0, c.v0, c.omega, c.velocity];
+    curve.windows(2).any(|seg| {
+        let (a, b) = (w(&seg[0]), w(&seg[1]));
+        let d: [f64; 4] = [0, 1, 2, 3].map(|k| b[k] - a[k]);
+        let l2: f64 = d.iter().map(|c| c * c).sum();
+        let s = if l2 > 0.0 {
+            ((0..4).map(|k| (u[k] - a[k]) * d[k]).sum::<f64>() / l2).clamp(0.0, 1.0)
+        } else {
+            0.0
+        };
+        (0..4)
+            .map(|k| (u[k] - a[k] - s * d[k]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+            <= tol
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn four_by_four_solve() {
+        let a = [
+            [2.0, 0.0, 0.0, 1.0],
+            [0.0, 3.0, 0.0, 0.0],
+            [1.0, 0.0, 1.0, 0.0],
+            [0.0, 0.0, 0.0, 4.0],
+        ];
+        let x = solve4(a, [3.0, 3.0, 2.0, 4.0]).unwrap();
+        for (got, want) in x.iter().zip([1.0, 1.0, 1.0, 1.0]) {
+            assert!((got - want).abs() < 1e-15, "{x:?}");
+        }
+        let t = tangent(
+            [
+                [1.0, 0.0, 0.0, 0.0],
+                [0.0, 1.0, 0.0, 0.0],
+                [0.0, 0.0, 1.0, -1.0],
+            ],
+            [0.0, 0.0, 0.0, 1.0],
+        )
+        .unwrap();
+        let h = 0.5_f64.sqrt();
+        assert!(
+            (t[2] - h).abs() < 1e-15 && (t[3] - h).abs() < 1e-15,
+            "{t:?}"
+        );
+    }
+
+    #[test]
+    fn a_point_on_a_traced_curve_is_covered() {
+        let at = |omega: f64, velocity: f64| CurvePoint {
+            omega,
+            velocity,
+            x0: 0.1,
+            v0: 0.0,
+            multipliers: [(-1.0, 0.0), (0.5, 0.0)],
+            impacts: 1,
+        };
+        let curve = [at(2.0, 0.06), at(2.1, 0.07)];
+        let p = |omega, velocity| BifurcationPoint {
+            kind: Kind::PeriodDoubling,
+            omega,
+            velocity,
+            period: 1,
+            x0: 0.1,
+            v0: 0.0,
+            multipliers: [(-1.0, 0.0), (0.5, 0.0)],
+            max_x: 0.2,
+            omega_error: 0.0,
+            branch: 0,
+            index: 0,
+            impacts_before: 1,
+            impacts_after: 1,
+            sticks_before: false,
+            sticks_after: false,
+        };
+        assert!(covers(&curve, &p(2.05, 0.065), 1e-9));
+        assert!(!covers(&curve, &p(2.05, 0.066), 1e-4));
+        assert!(!covers(&curve, &p(2.2, 0.08), 1e-4));
+    }
+}
