@@ -294,6 +294,7 @@ impl Model {
         };
         sim.advance_to(tau0, &mut obs)
             .map_err(|e| describe(&e, &scale))?;
+        sim.keep_flight(mode == ShakerMode::External);
         Ok(Self {
             sim,
             scale,
@@ -338,7 +339,8 @@ impl Model {
         if (cp.tol, cp.order, cp.chatter, cp.max_chatter_impacts) != settings {
             return Err("the FMU state's solver settings are not this FMU's".into());
         }
-        let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
+        let mut sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
+        sim.keep_flight(external);
         let phase_ref = restore_phase_ref(&scale, saved.phase_ref, saved.applied, sim.instant())?;
         // In internal mode the phase reference is the plate itself.
         if !external && cp.plate != sinusoid_record(&phase_ref) {
@@ -484,7 +486,66 @@ impl Model {
             self.time = t_end;
             return Ok(());
         }
+        if self.mode == ShakerMode::External && self.fly_over(t_end, values, derivatives) {
+            return Ok(());
+        }
         self.step_core(t_end, values, derivatives, events, stop_at_events)
+    }
+
+    /// External mode: the step when the core's current flight covers the new plate piece
+    /// without an event (`Simulator::fly_over`: no step to compute, no event, so nothing to
+    /// undo or check); `false` (nothing changed) when it does not, or the piece cannot be
+    /// built (`step_core` then takes the step or reports why).
+    fn fly_over(&mut self, t_end: f64, values: &[f64], derivatives: &PlateInputs) -> bool {
+        let (tau_end, wanted, _) = self.plan(t_end, values);
+        if wanted != self.applied || self.pending.is_some() {
+            return false;
+        }
+        let now = self.sim.instant();
+        let (z, zdot, _) = self.sim.plate().motion(now);
+        let Ok((piece, history)) =
+            self.external_piece(now, tau_end, (z, zdot), values, derivatives)
+        else {
+            return false;
+        };
+        if !self.sim.fly_over(&piece) {
+            return false;
+        }
+        self.history = history;
+        self.impulse = impulse_of(&[]);
+        self.at_event = false;
+        self.time = t_end;
+        true
+    }
+
+    /// The external plate over `[now, tau_end]` from the inputs (the plate is at `(z, zdot)`
+    /// now) and the sample history with the inputs' sample added.
+    fn external_piece(
+        &self,
+        now: Instant,
+        tau_end: f64,
+        (z, zdot): (f64, f64),
+        values: &[f64],
+        derivatives: &PlateInputs,
+    ) -> Result<(PolyPiece, SampleHistory), String> {
+        let inputs = plate_inputs(values, derivatives);
+        let sample = Sample {
+            t: now,
+            z: self.scale.plate_coefficient(0, values[var::z_in]),
+            zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
+        };
+        let mut history = self.history;
+        history.push(sample).map_err(|e| describe_param(&e))?;
+        let derivatives_given = inputs[2..].iter().any(Option::is_some);
+        let scheme = Reconstruction::of(values[var::plate_reconstruction]);
+        let piece = if derivatives_given || scheme != Some(Reconstruction::Hermite) {
+            plate_piece(&self.scale, now, tau_end, &inputs, Some(z))?
+        } else {
+            history
+                .piece(Instant::new(tau_end), (z, zdot))
+                .map_err(|e| describe_param(&e))?
+        };
+        Ok((piece, history))
     }
 
     /// What a step to `t_end` (s) asks for: the end in core time `τ`, the requested `(Ω, V)`,
@@ -542,26 +603,9 @@ impl Model {
         match self.mode {
             ShakerMode::External => {
                 let st = self.sim.state();
-                let inputs = plate_inputs(values, derivatives);
-                let sample = Sample {
-                    t: now,
-                    z: self.scale.plate_coefficient(0, values[var::z_in]),
-                    zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
-                };
-                let mut history = self.history;
-                history
-                    .push(sample)
-                    .map_err(|e| StepFailure::Refused(describe_param(&e)))?;
-                let derivatives_given = inputs[2..].iter().any(Option::is_some);
-                let scheme = Reconstruction::of(values[var::plate_reconstruction]);
-                let piece = if derivatives_given || scheme != Some(Reconstruction::Hermite) {
-                    plate_piece(&self.scale, now, tau_end, &inputs, Some(st.z))
-                } else {
-                    history
-                        .piece(Instant::new(tau_end), (st.z, st.zdot))
-                        .map_err(|e| describe_param(&e))
-                }
-                .map_err(StepFailure::Refused)?;
+                let (piece, history) = self
+                    .external_piece(now, tau_end, (st.z, st.zdot), values, derivatives)
+                    .map_err(StepFailure::Refused)?;
                 self.history = history;
                 if let Err(e) = self.sim.set_plate(piece.into()) {
                     self.undo(&undo);
@@ -664,7 +708,8 @@ impl Model {
 
     /// Back to the state saved before a step (see [`Model::step_core`]).
     fn undo(&mut self, (cp, phase_ref, applied, history, impulse): &Undo) {
-        if let Ok(sim) = Simulator::from_checkpoint(cp) {
+        if let Ok(mut sim) = Simulator::from_checkpoint(cp) {
+            sim.keep_flight(self.mode == ShakerMode::External);
             self.sim = sim;
             self.phase_ref = *phase_ref;
             self.applied = *applied;

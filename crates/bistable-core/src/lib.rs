@@ -40,7 +40,7 @@ pub mod units;
 
 pub use audit::GapAudit;
 pub use batch::{Batch, JoinError, LaneObserver};
-pub use checkpoint::{Checkpoint, PlateRecord};
+pub use checkpoint::{Checkpoint, KeptFlight, PlateRecord};
 pub use classify::{
     classify, classify_from, largest_lyapunov, Classification, ClassifyOptions, ClassifyRun,
     ResponseClass, Tracking,
