@@ -155,16 +155,19 @@ impl SampleHistory {
 
     /// The samples usable for a piece ending at `end`, newest first: the newest one, then older
     /// ones while they are joined and spaced within `[h/4, 4h]`, `h = end − newest`.
-    fn usable(&self, end: Instant) -> Vec<Sample> {
-        let all: Vec<(Sample, bool)> = self.entries().collect();
-        let Some(&(newest, _)) = all.last() else {
-            return Vec::new();
+    fn usable(&self, end: Instant) -> Newest {
+        let mut out = Newest::default();
+        // The stored samples fill the first slots, oldest first.
+        let all = &self.samples[..self.len()];
+        let Some(&Some((newest, _))) = all.last() else {
+            return out;
         };
         let h = end.since(newest.t);
-        let mut out = vec![newest];
+        out.push(newest);
         for i in (1..all.len()).rev() {
-            let (newer, joined) = all[i];
-            let older = all[i - 1].0;
+            let (Some((newer, joined)), Some((older, _))) = (all[i], all[i - 1]) else {
+                break;
+            };
             let spacing = newer.t.since(older.t);
             if !(joined && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
@@ -176,21 +179,26 @@ impl SampleHistory {
 
     /// The samples a piece ending at `end` is built from, newest first (see the module
     /// documentation for the choice of their number).
-    fn nodes(&self, end: Instant) -> Vec<Sample> {
+    fn nodes(&self, end: Instant) -> Newest {
         let mut usable = self.usable(end);
         let checkable = usable.len().saturating_sub(1).min(MAX_NODES);
         let mut best = (f64::INFINITY, 1);
-        for m in 1..=checkable {
-            let (newest, older) = (usable[0], &usable[1..=m]);
-            let c = hermite(older, older[0].t);
+        if checkable > 0 {
+            // The Hermite polynomials through the older samples share one table of divided
+            // differences (the table of the first nodes is a part of the table of more).
+            let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
+            let table = Table::of(older, older[0].t);
             let s = newest.t.since(older[0].t);
-            let (z, zd) = eval(&c, s);
-            let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
-            if m == 1 || miss <= best.0 / GAIN {
-                best = (miss, m);
+            for m in 1..=checkable {
+                let c = table.monomials(2 * m);
+                let (z, zd) = eval(&c, s);
+                let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
+                if m == 1 || miss <= best.0 / GAIN {
+                    best = (miss, m);
+                }
             }
         }
-        usable.truncate(best.1);
+        usable.n = usable.n.min(best.1);
         usable
     }
 
@@ -198,6 +206,7 @@ impl SampleHistory {
     /// velocity `now = (z, ż)` at the newest sample's instant.
     pub fn piece(&self, end: Instant, now: (f64, f64)) -> Result<PolyPiece, ParamError> {
         let nodes = self.nodes(end);
+        let nodes = nodes.as_slice();
         let Some(first) = nodes.first() else {
             return Err(refuse(
                 "plate_samples",
@@ -229,6 +238,42 @@ impl SampleHistory {
     }
 }
 
+/// Up to [`MAX_SAMPLES`] samples, newest first.
+#[derive(Clone, Copy)]
+struct Newest {
+    s: [Sample; MAX_SAMPLES],
+    n: usize,
+}
+
+impl Default for Newest {
+    fn default() -> Self {
+        let none = Sample {
+            t: Instant::new(0.0),
+            z: 0.0,
+            zdot: 0.0,
+        };
+        Self {
+            s: [none; MAX_SAMPLES],
+            n: 0,
+        }
+    }
+}
+
+impl Newest {
+    fn push(&mut self, s: Sample) {
+        self.s[self.n] = s;
+        self.n += 1;
+    }
+
+    fn len(&self) -> usize {
+        self.n
+    }
+
+    fn as_slice(&self) -> &[Sample] {
+        &self.s[..self.n]
+    }
+}
+
 /// Whether `b` continues `a` smoothly, `h = b.t − a.t > 0` (see the module documentation).
 fn joins(a: &Sample, b: &Sample, h: f64) -> bool {
     let sum = a.zdot + b.zdot;
@@ -251,37 +296,58 @@ fn eval(c: &[f64; MAX_POLY_DEGREE + 1], s: f64) -> (f64, f64) {
 /// Monomial coefficients in `s = τ − origin` of the Hermite polynomial through `(z, ż)` at
 /// each node (degree `2·nodes − 1`), by divided differences on doubled nodes.
 fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
-    let n = 2 * nodes.len();
-    let mut x = [0.0; MAX_POLY_DEGREE + 1];
-    let mut q = [0.0; MAX_POLY_DEGREE + 1];
-    for (i, s) in nodes.iter().enumerate() {
-        let xi = s.t.since(origin);
-        x[2 * i] = xi;
-        x[2 * i + 1] = xi;
-        q[2 * i] = s.z;
-        q[2 * i + 1] = s.z;
-    }
-    // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i]; on a doubled node the
-    // first divided difference is the sample's velocity.
-    for j in 1..n {
-        for i in (j..n).rev() {
-            q[i] = if j == 1 && i % 2 == 1 {
-                nodes[i / 2].zdot
-            } else {
-                (q[i] - q[i - 1]) / (x[i] - x[i - j])
-            };
+    Table::of(nodes, origin).monomials(2 * nodes.len())
+}
+
+/// Divided differences on doubled nodes: `x` the nodes, `q[i] = f[x_0, …, x_i]`.
+struct Table {
+    x: [f64; MAX_POLY_DEGREE + 1],
+    q: [f64; MAX_POLY_DEGREE + 1],
+}
+
+impl Table {
+    /// The table for `nodes` (at most [`MAX_NODES`]), in `s = τ − origin`. Its first `2m`
+    /// entries are the table of the first `m` nodes, the same numbers: entry `i` is computed
+    /// from entries `≤ i` alone.
+    fn of(nodes: &[Sample], origin: Instant) -> Self {
+        let n = 2 * nodes.len();
+        let mut x = [0.0; MAX_POLY_DEGREE + 1];
+        let mut q = [0.0; MAX_POLY_DEGREE + 1];
+        for (i, s) in nodes.iter().enumerate() {
+            let xi = s.t.since(origin);
+            x[2 * i] = xi;
+            x[2 * i + 1] = xi;
+            q[2 * i] = s.z;
+            q[2 * i + 1] = s.z;
         }
-    }
-    // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
-    let mut c = [0.0; MAX_POLY_DEGREE + 1];
-    c[0] = q[n - 1];
-    for j in (0..n - 1).rev() {
-        for k in (1..n).rev() {
-            c[k] = c[k - 1] - x[j] * c[k];
+        // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i]; on a doubled node
+        // the first divided difference is the sample's velocity.
+        for j in 1..n {
+            for i in (j..n).rev() {
+                q[i] = if j == 1 && i % 2 == 1 {
+                    nodes[i / 2].zdot
+                } else {
+                    (q[i] - q[i - 1]) / (x[i] - x[i - j])
+                };
+            }
         }
-        c[0] = q[j] - x[j] * c[0];
+        Self { x, q }
     }
-    c
+
+    /// Monomial coefficients of the interpolant through the first `n` (even) entries.
+    fn monomials(&self, n: usize) -> [f64; MAX_POLY_DEGREE + 1] {
+        let (x, q) = (&self.x, &self.q);
+        // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
+        let mut c = [0.0; MAX_POLY_DEGREE + 1];
+        c[0] = q[n - 1];
+        for j in (0..n - 1).rev() {
+            for k in (1..n).rev() {
+                c[k] = c[k - 1] - x[j] * c[k];
+            }
+            c[0] = q[j] - x[j] * c[0];
+        }
+        c
+    }
 }
 
 /// Why [`taylor_piece`] refused a piece.
@@ -467,6 +533,64 @@ mod tests {
         let mut nan = sine(0.3);
         nan.zdot = f64::NAN;
         assert!(h2.push(nan).is_err());
+    }
+
+    #[test]
+    fn one_table_gives_each_order_the_bits_of_its_own() {
+        // The interpolant through the first m nodes from the table of all of them equals, bit
+        // for bit, the one from a table of those m nodes alone (divided differences, then
+        // monomials, as computed before the table was shared).
+        fn alone(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
+            let n = 2 * nodes.len();
+            let mut x = [0.0; MAX_POLY_DEGREE + 1];
+            let mut q = [0.0; MAX_POLY_DEGREE + 1];
+            for (i, s) in nodes.iter().enumerate() {
+                let xi = s.t.since(origin);
+                (x[2 * i], x[2 * i + 1]) = (xi, xi);
+                (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
+            }
+            for j in 1..n {
+                for i in (j..n).rev() {
+                    q[i] = if j == 1 && i % 2 == 1 {
+                        nodes[i / 2].zdot
+                    } else {
+                        (q[i] - q[i - 1]) / (x[i] - x[i - j])
+                    };
+                }
+            }
+            let mut c = [0.0; MAX_POLY_DEGREE + 1];
+            c[0] = q[n - 1];
+            for j in (0..n - 1).rev() {
+                for k in (1..n).rev() {
+                    c[k] = c[k - 1] - x[j] * c[k];
+                }
+                c[0] = q[j] - x[j] * c[0];
+            }
+            c
+        }
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..2000 {
+            let t0 = 100.0 * rnd();
+            let mut nodes = [sine(0.0); MAX_NODES];
+            for (k, n) in nodes.iter_mut().enumerate() {
+                *n = Sample {
+                    t: Instant::new(t0 - (k as f64) * (0.01 + 0.001 * rnd())),
+                    z: rnd(),
+                    zdot: rnd(),
+                };
+            }
+            let table = Table::of(&nodes, nodes[0].t);
+            for m in 1..=MAX_NODES {
+                let (a, b) = (table.monomials(2 * m), alone(&nodes[..m], nodes[0].t));
+                assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "m = {m}");
+            }
+        }
     }
 
     #[test]
