@@ -310,7 +310,19 @@ impl Table {
     /// entries are the table of the first `m` nodes, the same numbers: entry `i` is computed
     /// from entries `≤ i` alone.
     fn of(nodes: &[Sample], origin: Instant) -> Self {
-        let n = 2 * nodes.len();
+        // Compiled for each number of nodes, so that the loops are unrolled.
+        match nodes.len() {
+            1 => Self::of_n::<2>(nodes, origin),
+            2 => Self::of_n::<4>(nodes, origin),
+            _ => Self::of_n::<6>(nodes, origin),
+        }
+    }
+
+    /// [`Table::of`] for `N / 2` nodes.
+    #[inline(always)]
+    fn of_n<const N: usize>(nodes: &[Sample], origin: Instant) -> Self {
+        let n = N;
+        let nodes = &nodes[..N / 2];
         let mut x = [0.0; MAX_POLY_DEGREE + 1];
         let mut q = [0.0; MAX_POLY_DEGREE + 1];
         for (i, s) in nodes.iter().enumerate() {
@@ -336,6 +348,18 @@ impl Table {
 
     /// Monomial coefficients of the interpolant through the first `n` (even) entries.
     fn monomials(&self, n: usize) -> [f64; MAX_POLY_DEGREE + 1] {
+        // Compiled for each `n`, so that the loops are unrolled and `c` stays in registers.
+        match n {
+            2 => self.monomials_n::<2>(),
+            4 => self.monomials_n::<4>(),
+            _ => self.monomials_n::<6>(),
+        }
+    }
+
+    /// [`Table::monomials`] for `n = N`.
+    #[inline(always)]
+    fn monomials_n<const N: usize>(&self) -> [f64; MAX_POLY_DEGREE + 1] {
+        let n = N;
         let (x, q) = (&self.x, &self.q);
         // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
         let mut c = [0.0; MAX_POLY_DEGREE + 1];

@@ -861,7 +861,7 @@ impl Simulator {
                 return false;
             }
         }
-        self.plate = PlateEval::new((*piece).into());
+        self.plate.set_piece(*piece);
         self.step.len = len;
         self.step.end = StepEnd::Plain;
         self.step.kept = true;
