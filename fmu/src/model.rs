@@ -486,8 +486,12 @@ impl Model {
             self.time = t_end;
             return Ok(());
         }
-        if self.mode == ShakerMode::External && self.fly_over(t_end, values, derivatives) {
-            return Ok(());
+        if self.mode == ShakerMode::External {
+            let keep = keeps_flight(values, derivatives);
+            self.sim.keep_flight(keep);
+            if keep && self.fly_over(t_end, values, derivatives) {
+                return Ok(());
+            }
         }
         self.step_core(t_end, values, derivatives, events, stop_at_events)
     }
@@ -1146,6 +1150,16 @@ const MAX_SAVED_STEP: f64 = 64.0;
 /// The model at a communication point, to go back to when a step fails: core, phase reference,
 /// `(Ω, V)` in force, plate samples, plate impulse.
 type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory, f64);
+
+/// Whether the core keeps a free flight across the plate pieces of an external-mode step
+/// (`Simulator::keep_flight`): for sampled inputs rebuilt by the Hermite scheme. Pieces from
+/// input derivatives or the first-order scheme restart the integration at each piece as before
+/// (the first-order scheme's plate acceleration is wrong by O(1), which makes its trajectory
+/// depend on every rounding: it is kept as it behaved).
+fn keeps_flight(values: &[f64], derivatives: &PlateInputs) -> bool {
+    Reconstruction::of(values[var::plate_reconstruction]) == Some(Reconstruction::Hermite)
+        && derivatives[2..].iter().all(Option::is_none)
+}
 
 /// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they
 /// gave the plate.
