@@ -13,8 +13,8 @@ use bistable_core::interrupt::{with_check, Check, CHECK_EVERY};
 use bistable_core::sampled::{taylor_piece, TaylorPieceError};
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
-    Params, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator,
-    Sinusoid, SolverOptions, State, StepView, Well,
+    Params, PieceMemo, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError,
+    Simulator, Sinusoid, SolverOptions, State, StepView, Well,
 };
 
 use crate::md::var;
@@ -147,6 +147,8 @@ pub struct Model {
     /// The last step stopped at an event (early return): `time` is the event's time (before
     /// the requested end, or that end) and the event has been applied.
     pub at_event: bool,
+    /// The divided differences of the last sampled piece's nodes (derived data, not saved).
+    pub memo: PieceMemo,
 }
 
 /// Collects the events of an advance and the end of the last Taylor step computed.
@@ -307,6 +309,7 @@ impl Model {
             history: SampleHistory::new(),
             impulse: impulse_of(events),
             at_event: false,
+            memo: PieceMemo::default(),
         })
     }
 
@@ -387,6 +390,7 @@ impl Model {
             history,
             impulse: saved.impulse,
             at_event: saved.at_event,
+            memo: PieceMemo::default(),
         };
         model.check_physical(values)?;
         Ok(model)
@@ -525,7 +529,7 @@ impl Model {
     /// The external plate over `[now, tau_end]` from the inputs (the plate is at `(z, zdot)`
     /// now) and the sample history with the inputs' sample added.
     fn external_piece(
-        &self,
+        &mut self,
         now: Instant,
         tau_end: f64,
         (z, zdot): (f64, f64),
@@ -546,7 +550,7 @@ impl Model {
             plate_piece(&self.scale, now, tau_end, &inputs, Some(z))?
         } else {
             history
-                .piece(Instant::new(tau_end), (z, zdot))
+                .piece_with(Instant::new(tau_end), (z, zdot), &mut self.memo)
                 .map_err(|e| describe_param(&e))?
         };
         Ok((piece, history))

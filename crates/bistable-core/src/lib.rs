@@ -50,7 +50,7 @@ pub use lane_run::{drive, LaneRun};
 pub use lanes::Width;
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use ramp::SetpointRamp;
-pub use sampled::{Sample, SampleHistory};
+pub use sampled::{PieceMemo, Sample, SampleHistory};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
 pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
 pub use simulator::{Observer, SimError, Simulator, State, Stats, StepView};

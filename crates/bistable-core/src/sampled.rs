@@ -179,7 +179,14 @@ impl SampleHistory {
 
     /// The samples a piece ending at `end` is built from, newest first (see the module
     /// documentation for the choice of their number).
+    #[cfg(test)]
     fn nodes(&self, end: Instant) -> Newest {
+        self.nodes_with(end, &PieceMemo::default())
+    }
+
+    /// [`SampleHistory::nodes`], with the table of the older samples from `memo` when it holds
+    /// it.
+    fn nodes_with(&self, end: Instant, memo: &PieceMemo) -> Newest {
         let mut usable = self.usable(end);
         let checkable = usable.len().saturating_sub(1).min(MAX_NODES);
         let mut best = (f64::INFINITY, 1);
@@ -187,7 +194,14 @@ impl SampleHistory {
             // The Hermite polynomials through the older samples share one table of divided
             // differences (the table of the first nodes is a part of the table of more).
             let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
-            let table = Table::of(older, older[0].t);
+            let fresh;
+            let table = match memo.table_of(older) {
+                Some(t) => t,
+                None => {
+                    fresh = Table::of(older, older[0].t);
+                    &fresh
+                }
+            };
             let s = newest.t.since(older[0].t);
             for m in 1..=checkable {
                 let c = table.monomials(2 * m);
@@ -205,7 +219,18 @@ impl SampleHistory {
     /// The plate over `[newest sample, end]`, starting at the plate's current position and
     /// velocity `now = (z, ż)` at the newest sample's instant.
     pub fn piece(&self, end: Instant, now: (f64, f64)) -> Result<PolyPiece, ParamError> {
-        let nodes = self.nodes(end);
+        self.piece_with(end, now, &mut PieceMemo::default())
+    }
+
+    /// [`SampleHistory::piece`] (the same piece), keeping in `memo` the table of the nodes it
+    /// is built from: the next piece checks its orders on them.
+    pub fn piece_with(
+        &self,
+        end: Instant,
+        now: (f64, f64),
+        memo: &mut PieceMemo,
+    ) -> Result<PolyPiece, ParamError> {
+        let nodes = self.nodes_with(end, memo);
         let nodes = nodes.as_slice();
         let Some(first) = nodes.first() else {
             return Err(refuse(
@@ -223,7 +248,9 @@ impl SampleHistory {
                 "end must be after the newest sample",
             ));
         }
-        let mut c = hermite(&nodes, start);
+        let table = Table::of(nodes, start);
+        let mut c = table.monomials(2 * nodes.len());
+        memo.keep(nodes, table);
         let (z_now, zd_now) = now;
         let (d0, d1) = (z_now - c[0], zd_now - c[1]);
         // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
@@ -295,11 +322,45 @@ fn eval(c: &[f64; MAX_POLY_DEGREE + 1], s: f64) -> (f64, f64) {
 
 /// Monomial coefficients in `s = τ − origin` of the Hermite polynomial through `(z, ż)` at
 /// each node (degree `2·nodes − 1`), by divided differences on doubled nodes.
+#[cfg(test)]
 fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
     Table::of(nodes, origin).monomials(2 * nodes.len())
 }
 
+/// The table of divided differences of the nodes of the last piece built
+/// ([`SampleHistory::piece_with`]): the next piece checks its orders on the same samples, with
+/// the same numbers. Derived data, not part of a history's state (an empty memo gives the same
+/// pieces).
+#[derive(Clone, Copy, Default)]
+pub struct PieceMemo {
+    nodes: Newest,
+    table: Table,
+}
+
+impl PieceMemo {
+    /// The table of `nodes` (from the first one) if it is a part of the one kept: the same
+    /// samples, bit for bit (the table of the first `m` nodes is the start of the table of
+    /// more).
+    fn table_of(&self, nodes: &[Sample]) -> Option<&Table> {
+        let kept = self.nodes.as_slice();
+        let bits = |s: &Sample| {
+            let (hi, lo) = s.t.parts();
+            [hi, lo, s.z, s.zdot].map(f64::to_bits)
+        };
+        let same =
+            kept.len() >= nodes.len() && kept.iter().zip(nodes).all(|(a, b)| bits(a) == bits(b));
+        same.then_some(&self.table)
+    }
+
+    fn keep(&mut self, nodes: &[Sample], table: Table) {
+        self.nodes.s[..nodes.len()].copy_from_slice(nodes);
+        self.nodes.n = nodes.len();
+        self.table = table;
+    }
+}
+
 /// Divided differences on doubled nodes: `x` the nodes, `q[i] = f[x_0, …, x_i]`.
+#[derive(Clone, Copy, Default)]
 struct Table {
     x: [f64; MAX_POLY_DEGREE + 1],
     q: [f64; MAX_POLY_DEGREE + 1],
@@ -614,6 +675,32 @@ mod tests {
                 let (a, b) = (table.monomials(2 * m), alone(&nodes[..m], nodes[0].t));
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "m = {m}");
             }
+        }
+    }
+
+    #[test]
+    fn pieces_with_a_memo_are_the_pieces_without() {
+        let (mut hist, mut memo) = (SampleHistory::new(), PieceMemo::default());
+        for k in 0..400 {
+            // Smooth, then a jump, then noise, with a few uneven spacings.
+            let t = k as f64 * 0.01 + if k % 37 == 0 { 0.004 } else { 0.0 };
+            let mut s = sine(t);
+            if k >= 150 {
+                s.z += 0.3;
+            }
+            if k >= 250 {
+                s.z += 1e-5 * ((k * 7919) % 13) as f64;
+            }
+            hist.push(s).unwrap();
+            let end = Instant::new(t + 0.01);
+            let now = (s.z + 1e-9, s.zdot);
+            let a = hist.piece(end, now).unwrap();
+            let b = hist.piece_with(end, now, &mut memo).unwrap();
+            assert_eq!(
+                a.coeffs().map(f64::to_bits),
+                b.coeffs().map(f64::to_bits),
+                "k = {k}"
+            );
         }
     }
 
