@@ -94,6 +94,10 @@ pub struct KeptFlight {
     pub v0: f64,
     /// How far from the start the series holds (time units).
     pub reach: f64,
+    /// `(s, x(s), x'(s))` where the series was last evaluated for the bound that decides
+    /// whether the next piece continues the step (part of the state: that decision depends
+    /// on it).
+    pub anchor: Option<(f64, f64, f64)>,
 }
 
 fn instant(name: &'static str, (hi, lo): (f64, f64)) -> Result<Instant, ParamError> {

@@ -257,6 +257,9 @@ pub fn put_checkpoint(w: &mut Writer, c: &Checkpoint) {
     });
     w.opt(c.kept, |w, k| {
         [k.x0, k.v0, k.reach].iter().for_each(|&v| w.f64(v));
+        w.opt(k.anchor, |w, (s, x, v)| {
+            [s, x, v].iter().for_each(|&a| w.f64(a));
+        });
     });
 }
 
@@ -332,6 +335,7 @@ pub fn get_checkpoint(r: &mut Reader) -> Res<Checkpoint> {
                 x0: r.f64()?,
                 v0: r.f64()?,
                 reach: r.f64()?,
+                anchor: r.opt("kept flight anchor", |r| Ok((r.f64()?, r.f64()?, r.f64()?)))?,
             })
         })?,
     })

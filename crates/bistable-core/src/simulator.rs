@@ -784,11 +784,13 @@ impl Simulator {
 
     /// The current step is a free flight that the plate piece's end cut short (its series goes
     /// on past it) and flights are kept across pieces: an advance stops there without ending
-    /// the step (no advance goes past the piece's end).
+    /// the step (no advance goes past the piece's end). Not a step of length zero (a
+    /// checkpoint does not keep one: it is computed again when needed).
     fn cut_at_horizon(&self) -> bool {
         self.keep_flight
             && !self.step.riding
             && self.step.end == StepEnd::Plain
+            && self.step.len > 0.0
             && self.step.len < self.step.reach
             && self.plate.law().horizon().is_some()
     }
@@ -798,10 +800,11 @@ impl Simulator {
     /// new piece's end (or its reach, `whole`: only if it reaches the piece's end), if the gap
     /// `x − z` is shown to stay open over that stretch by bounds (the last evaluation of the
     /// series and `|x''|` over the step for the mass, the piece's coefficients for the plate)
-    /// and the barrier is out of reach over the whole step. Returns whether it did; otherwise
-    /// nothing changes. The outcome depends only on the step and the piece (a bound that
-    /// fails from the last evaluation is tried again from one now), so a simulator rebuilt
-    /// from a checkpoint decides the same way.
+    /// and the barrier is out of reach over the whole step (a bound that fails from the last
+    /// evaluation is tried again from one now, which becomes the last). Returns whether it
+    /// did; otherwise only the last evaluation may change. The outcome depends on the step,
+    /// the piece and the last evaluation, which a checkpoint of a kept step records, so a
+    /// simulator rebuilt from one decides the same way.
     fn continue_flight(&mut self, piece: &PolyPiece, whole: bool) -> bool {
         if !self.live
             || self.mode != ContactMode::Free
@@ -1024,6 +1027,7 @@ impl Simulator {
                 x0: self.step.series.x[0],
                 v0: self.step.series.x[1],
                 reach: self.step.reach,
+                anchor: self.step.guard.and_then(|g| g.anchor),
             }),
         }
     }
@@ -1083,7 +1087,10 @@ impl Simulator {
         }
         let (start, room) = (piece.start().since(self.t0), piece.end().since(self.t0));
         let len = room.min(k.reach);
-        if !(start > 0.0 && len > start && self.now.since(self.t0) <= room) {
+        let anchored = k
+            .anchor
+            .is_none_or(|(s, x, v)| s >= 0.0 && s <= start && x.is_finite() && v.is_finite());
+        if !(start > 0.0 && len > start && self.now.since(self.t0) <= room && anchored) {
             return Err(bad(
                 "kept",
                 start,
@@ -1113,7 +1120,15 @@ impl Simulator {
         step.end_gap = None;
         step.reach = k.reach;
         step.kept = true;
-        step.guard = None;
+        step.guard = k.anchor.map(|a| Guard {
+            anchor: Some(a),
+            ..Guard::of(
+                &step.series.x[..=p + 1],
+                k.reach,
+                self.well,
+                self.on_barrier,
+            )
+        });
         self.live = true;
         Ok(())
     }
