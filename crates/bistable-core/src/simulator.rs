@@ -822,12 +822,15 @@ impl Simulator {
         let sa = now.since(t0);
         let room = piece.end().since(t0);
         let len = room.min(reach);
-        if !(len > sa) || (whole && !(room < reach)) {
+        // NaN fails every comparison: nothing is continued then.
+        let fits = len > sa && (room < reach || !whole);
+        if !fits {
             return false;
         }
         let c = piece.coeffs();
         let z_old = self.plate.law().motion(now).0;
-        if !((c[0] - z_old).abs() <= 1e-12 * z_old.abs().max(1.0)) {
+        let continuous = (c[0] - z_old).abs() <= 1e-12 * z_old.abs().max(1.0);
+        if !continuous {
             return false;
         }
         let (well, on_barrier) = (self.well, self.on_barrier);
@@ -860,7 +863,8 @@ impl Simulator {
             let (xa, va) = eval_d(x, sa);
             guard.anchor = Some((sa, xa, va));
             let low = (xa - c[0]) + ((va - c[1]) * hw).min(0.0) - (0.5 * guard.accel + q) * hw * hw;
-            if !(low > margin) {
+            let open = low > margin;
+            if !open {
                 return false;
             }
         }
