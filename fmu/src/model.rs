@@ -516,7 +516,7 @@ impl Model {
         else {
             return false;
         };
-        if !self.sim.fly_over(&piece) {
+        if !self.sim.fly_over(&piece, fly_limit(&self.scale)) {
             return false;
         }
         self.history = history;
@@ -1154,6 +1154,23 @@ const MAX_SAVED_STEP: f64 = 64.0;
 /// The model at a communication point, to go back to when a step fails: core, phase reference,
 /// `(Ω, V)` in force, plate samples, plate impulse.
 type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory, f64);
+
+/// The largest nondimensional position, velocity and acceleration (of the mass and the plate)
+/// for which a step without the state check (`Model::fly_over`) is sure to give finite outputs:
+/// the outputs are at most quartic in them (the potential energy) times a unit factor.
+fn fly_limit(scale: &Scale) -> f64 {
+    let factor = [
+        scale.length(1.0),
+        scale.velocity(1.0),
+        scale.acceleration(1.0),
+        scale.energy(1.0),
+        scale.specific_energy(1.0),
+        1.0,
+    ]
+    .iter()
+    .fold(0.0_f64, |m, f| m.max(f.abs()));
+    (1e280 / factor).sqrt().sqrt().min(1e50)
+}
 
 /// Whether the core keeps a free flight across the plate pieces of an external-mode step
 /// (`Simulator::keep_flight`): for sampled inputs rebuilt by the Hermite scheme. Pieces from

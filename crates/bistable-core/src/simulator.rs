@@ -295,8 +295,10 @@ struct Guard {
     usable: bool,
     /// `Σ k(k−1)|x_k| reach^(k−2) ≥ |x''|` over the reach.
     accel: f64,
-    /// `Σ|x_k| reach^k`, the size of `x` (for the rounding margin).
+    /// `Σ|x_k| reach^k ≥ |x|` over the reach (also for the rounding margin).
     size: f64,
+    /// `Σ k|x_k| reach^(k−1) ≥ |x'|` over the reach.
+    speed: f64,
     /// `(s, x(s), x'(s))` at the last point where the series was evaluated for a bound.
     anchor: Option<(f64, f64, f64)>,
 }
@@ -309,6 +311,11 @@ impl Guard {
             hk *= reach;
             size += xk.abs() * hk;
         }
+        let (mut speed, mut hk) = (0.0, 1.0);
+        for (k, &xk) in x.iter().enumerate().skip(1) {
+            speed += k as f64 * xk.abs() * hk;
+            hk *= reach;
+        }
         let (mut accel, mut hk) = (0.0, 1.0);
         for (k, &xk) in x.iter().enumerate().skip(2) {
             accel += (k * (k - 1)) as f64 * xk.abs() * hk;
@@ -316,9 +323,10 @@ impl Guard {
         }
         let far = barrier_far(well, on_barrier, x, reach);
         Self {
-            usable: far && size < 1e100 && accel < 1e100,
+            usable: far && size < 1e100 && speed < 1e100 && accel < 1e100,
             accel,
             size,
+            speed,
             anchor: None,
         }
     }
@@ -743,7 +751,7 @@ impl Simulator {
     /// contact force is non-negative, and is released at once if the new motion pulls away.
     pub fn set_plate(&mut self, plate: PlateMotion) -> Result<(), SimError> {
         if let PlateMotion::Poly(piece) = &plate {
-            if self.keep_flight && self.continue_flight(piece, false) {
+            if self.keep_flight && self.continue_flight(piece, false, f64::INFINITY) {
                 return Ok(());
             }
         }
@@ -774,8 +782,12 @@ impl Simulator {
     /// ([`Simulator::keep_flight`]) and the current free flight covers the whole piece without
     /// an event: the state is then the one [`Simulator::set_plate`] and an advance to the
     /// piece's end give. Otherwise returns `false` and changes nothing.
-    pub fn fly_over(&mut self, piece: &PolyPiece) -> bool {
-        if !(self.keep_flight && self.continue_flight(piece, true)) {
+    ///
+    /// `limit` bounds what the stretch may reach: the bounds used for `|x|`, `|x'|`, `|x''|`
+    /// over the step and for `|z|`, `|ż|`, `|z̈|` over the piece must not exceed it (a host that
+    /// skips its checks of the state after such a stretch chooses it so that they hold).
+    pub fn fly_over(&mut self, piece: &PolyPiece, limit: f64) -> bool {
+        if !(self.keep_flight && self.continue_flight(piece, true, limit)) {
             return false;
         }
         self.now = piece.end();
@@ -805,7 +817,7 @@ impl Simulator {
     /// did; otherwise only the last evaluation may change. The outcome depends on the step,
     /// the piece and the last evaluation, which a checkpoint of a kept step records, so a
     /// simulator rebuilt from one decides the same way.
-    fn continue_flight(&mut self, piece: &PolyPiece, whole: bool) -> bool {
+    fn continue_flight(&mut self, piece: &PolyPiece, whole: bool, limit: f64) -> bool {
         if !self.live
             || self.mode != ContactMode::Free
             || self.var.is_some()
@@ -839,15 +851,27 @@ impl Simulator {
         let guard = step
             .guard
             .get_or_insert_with(|| Guard::of(x, reach, well, on_barrier));
-        if !guard.usable {
-            return false;
-        }
         // The plate over the stretch, σ = s − sa ∈ [0, hw]: z ≤ c0 + c1 σ + q σ².
         let hw = len - sa;
         let (mut q, mut hk) = (0.0, 1.0);
         for &ck in &c[2..] {
             q += ck.abs() * hk;
             hk *= hw;
+        }
+        let plate = c[0].abs() + c[1].abs() * hw + q * hw * hw;
+        let plate_rate = c[1].abs() + 5.0 * q * hw;
+        let bounded = [
+            guard.size,
+            guard.speed,
+            guard.accel,
+            plate,
+            plate_rate,
+            20.0 * q,
+        ]
+        .iter()
+        .all(|&b| b <= limit);
+        if !(guard.usable && bounded) {
+            return false;
         }
         let margin = 1e-10 * (1.0 + guard.size + c[0].abs());
         // The mass from the last evaluation at s_ref ≤ sa: x ≥ x_ref + v_ref (s − s_ref) −

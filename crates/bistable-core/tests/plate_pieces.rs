@@ -125,7 +125,7 @@ fn run_pieces(
     let (mut states, mut ev) = (Vec::new(), Vec::new());
     for k in from..to {
         let piece = sinusoid_piece(h, k);
-        if k > 0 && !(fly && sim.fly_over(&piece)) {
+        if k > 0 && !(fly && sim.fly_over(&piece, f64::INFINITY)) {
             sim.set_plate(piece.into()).unwrap();
         }
         sim.advance_instant(piece.end(), &mut |e: &Event| ev.push(*e))
