@@ -13,8 +13,8 @@ use bistable_core::interrupt::{with_check, Check, CHECK_EVERY};
 use bistable_core::sampled::{taylor_piece, TaylorPieceError};
 use bistable_core::{
     potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
-    Params, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator,
-    Sinusoid, SolverOptions, State, StepView, Well,
+    Params, PieceMemo, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError,
+    Simulator, Sinusoid, SolverOptions, State, StepView, Well,
 };
 
 use crate::md::var;
@@ -147,6 +147,8 @@ pub struct Model {
     /// The last step stopped at an event (early return): `time` is the event's time (before
     /// the requested end, or that end) and the event has been applied.
     pub at_event: bool,
+    /// The divided differences of the last sampled piece's nodes (derived data, not saved).
+    pub memo: PieceMemo,
 }
 
 /// Collects the events of an advance and the end of the last Taylor step computed.
@@ -294,6 +296,7 @@ impl Model {
         };
         sim.advance_to(tau0, &mut obs)
             .map_err(|e| describe(&e, &scale))?;
+        sim.keep_flight(mode == ShakerMode::External);
         Ok(Self {
             sim,
             scale,
@@ -306,6 +309,7 @@ impl Model {
             history: SampleHistory::new(),
             impulse: impulse_of(events),
             at_event: false,
+            memo: PieceMemo::default(),
         })
     }
 
@@ -338,7 +342,8 @@ impl Model {
         if (cp.tol, cp.order, cp.chatter, cp.max_chatter_impacts) != settings {
             return Err("the FMU state's solver settings are not this FMU's".into());
         }
-        let sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
+        let mut sim = Simulator::from_checkpoint(cp).map_err(|e| describe(&e, &scale))?;
+        sim.keep_flight(external);
         let phase_ref = restore_phase_ref(&scale, saved.phase_ref, saved.applied, sim.instant())?;
         // In internal mode the phase reference is the plate itself.
         if !external && cp.plate != sinusoid_record(&phase_ref) {
@@ -385,6 +390,7 @@ impl Model {
             history,
             impulse: saved.impulse,
             at_event: saved.at_event,
+            memo: PieceMemo::default(),
         };
         model.check_physical(values)?;
         Ok(model)
@@ -484,7 +490,70 @@ impl Model {
             self.time = t_end;
             return Ok(());
         }
+        if self.mode == ShakerMode::External {
+            let keep = keeps_flight(values, derivatives);
+            self.sim.keep_flight(keep);
+            if keep && self.fly_over(t_end, values, derivatives) {
+                return Ok(());
+            }
+        }
         self.step_core(t_end, values, derivatives, events, stop_at_events)
+    }
+
+    /// External mode: the step when the core's current flight covers the new plate piece
+    /// without an event (`Simulator::fly_over`: no step to compute, no event, so nothing to
+    /// undo or check); `false` (nothing changed) when it does not, or the piece cannot be
+    /// built (`step_core` then takes the step or reports why).
+    fn fly_over(&mut self, t_end: f64, values: &[f64], derivatives: &PlateInputs) -> bool {
+        let (tau_end, wanted, _) = self.plan(t_end, values);
+        if wanted != self.applied || self.pending.is_some() {
+            return false;
+        }
+        let now = self.sim.instant();
+        let (z, zdot, _) = self.sim.plate().motion(now);
+        let Ok((piece, history)) =
+            self.external_piece(now, tau_end, (z, zdot), values, derivatives)
+        else {
+            return false;
+        };
+        if !self.sim.fly_over(&piece, fly_limit(&self.scale)) {
+            return false;
+        }
+        self.history = history;
+        self.impulse = impulse_of(&[]);
+        self.at_event = false;
+        self.time = t_end;
+        true
+    }
+
+    /// The external plate over `[now, tau_end]` from the inputs (the plate is at `(z, zdot)`
+    /// now) and the sample history with the inputs' sample added.
+    fn external_piece(
+        &mut self,
+        now: Instant,
+        tau_end: f64,
+        (z, zdot): (f64, f64),
+        values: &[f64],
+        derivatives: &PlateInputs,
+    ) -> Result<(PolyPiece, SampleHistory), String> {
+        let inputs = plate_inputs(values, derivatives);
+        let sample = Sample {
+            t: now,
+            z: self.scale.plate_coefficient(0, values[var::z_in]),
+            zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
+        };
+        let mut history = self.history;
+        history.push(sample).map_err(|e| describe_param(&e))?;
+        let derivatives_given = inputs[2..].iter().any(Option::is_some);
+        let scheme = Reconstruction::of(values[var::plate_reconstruction]);
+        let piece = if derivatives_given || scheme != Some(Reconstruction::Hermite) {
+            plate_piece(&self.scale, now, tau_end, &inputs, Some(z))?
+        } else {
+            history
+                .piece_with(Instant::new(tau_end), (z, zdot), &mut self.memo)
+                .map_err(|e| describe_param(&e))?
+        };
+        Ok((piece, history))
     }
 
     /// What a step to `t_end` (s) asks for: the end in core time `τ`, the requested `(Ω, V)`,
@@ -542,26 +611,9 @@ impl Model {
         match self.mode {
             ShakerMode::External => {
                 let st = self.sim.state();
-                let inputs = plate_inputs(values, derivatives);
-                let sample = Sample {
-                    t: now,
-                    z: self.scale.plate_coefficient(0, values[var::z_in]),
-                    zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
-                };
-                let mut history = self.history;
-                history
-                    .push(sample)
-                    .map_err(|e| StepFailure::Refused(describe_param(&e)))?;
-                let derivatives_given = inputs[2..].iter().any(Option::is_some);
-                let scheme = Reconstruction::of(values[var::plate_reconstruction]);
-                let piece = if derivatives_given || scheme != Some(Reconstruction::Hermite) {
-                    plate_piece(&self.scale, now, tau_end, &inputs, Some(st.z))
-                } else {
-                    history
-                        .piece(Instant::new(tau_end), (st.z, st.zdot))
-                        .map_err(|e| describe_param(&e))
-                }
-                .map_err(StepFailure::Refused)?;
+                let (piece, history) = self
+                    .external_piece(now, tau_end, (st.z, st.zdot), values, derivatives)
+                    .map_err(StepFailure::Refused)?;
                 self.history = history;
                 if let Err(e) = self.sim.set_plate(piece.into()) {
                     self.undo(&undo);
@@ -664,7 +716,8 @@ impl Model {
 
     /// Back to the state saved before a step (see [`Model::step_core`]).
     fn undo(&mut self, (cp, phase_ref, applied, history, impulse): &Undo) {
-        if let Ok(sim) = Simulator::from_checkpoint(cp) {
+        if let Ok(mut sim) = Simulator::from_checkpoint(cp) {
+            sim.keep_flight(self.mode == ShakerMode::External);
             self.sim = sim;
             self.phase_ref = *phase_ref;
             self.applied = *applied;
@@ -1101,6 +1154,33 @@ const MAX_SAVED_STEP: f64 = 64.0;
 /// The model at a communication point, to go back to when a step fails: core, phase reference,
 /// `(Ω, V)` in force, plate samples, plate impulse.
 type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory, f64);
+
+/// The largest nondimensional position, velocity and acceleration (of the mass and the plate)
+/// for which a step without the state check (`Model::fly_over`) is sure to give finite outputs:
+/// the outputs are at most quartic in them (the potential energy) times a unit factor.
+fn fly_limit(scale: &Scale) -> f64 {
+    let factor = [
+        scale.length(1.0),
+        scale.velocity(1.0),
+        scale.acceleration(1.0),
+        scale.energy(1.0),
+        scale.specific_energy(1.0),
+        1.0,
+    ]
+    .iter()
+    .fold(0.0_f64, |m, f| m.max(f.abs()));
+    (1e280 / factor).sqrt().sqrt().min(1e50)
+}
+
+/// Whether the core keeps a free flight across the plate pieces of an external-mode step
+/// (`Simulator::keep_flight`): for sampled inputs rebuilt by the Hermite scheme. Pieces from
+/// input derivatives or the first-order scheme restart the integration at each piece as before
+/// (the first-order scheme's plate acceleration is wrong by O(1), which makes its trajectory
+/// depend on every rounding: it is kept as it behaved).
+fn keeps_flight(values: &[f64], derivatives: &PlateInputs) -> bool {
+    Reconstruction::of(values[var::plate_reconstruction]) == Some(Reconstruction::Hermite)
+        && derivatives[2..].iter().all(Option::is_none)
+}
 
 /// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they
 /// gave the plate.

@@ -23,7 +23,7 @@ use crate::model::{PlateInputs, SavedModel, MAX_PLATE_ORDER};
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"BIFMUST\0";
 /// Format version; bump on any layout change.
-pub const VERSION: u32 = 4;
+pub const VERSION: u32 = 5;
 
 /// Everything an instance needs to continue exactly from a saved point.
 #[derive(Debug, Clone, PartialEq)]

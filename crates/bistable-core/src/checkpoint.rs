@@ -79,6 +79,25 @@ pub struct Checkpoint {
     /// A pending ride on the plate ending in sticking (the tail of a chatter sequence): its
     /// length from `t0` and cause.
     pub tail: Option<(f64, StickCause)>,
+    /// A free step from `t0` that later plate pieces continued (see
+    /// [`crate::Simulator::keep_flight`]).
+    pub kept: Option<KeptFlight>,
+}
+
+/// A free step kept across plate pieces: what rebuilds its series (which does not depend on
+/// the plate) and its extent.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct KeptFlight {
+    /// Mass position at the step's start.
+    pub x0: f64,
+    /// Mass velocity at the step's start.
+    pub v0: f64,
+    /// How far from the start the series holds (time units).
+    pub reach: f64,
+    /// `(s, x(s), x'(s))` where the series was last evaluated for the bound that decides
+    /// whether the next piece continues the step (part of the state: that decision depends
+    /// on it).
+    pub anchor: Option<(f64, f64, f64)>,
 }
 
 fn instant(name: &'static str, (hi, lo): (f64, f64)) -> Result<Instant, ParamError> {
@@ -161,6 +180,9 @@ impl Checkpoint {
         }
         if self.pinned > 3 {
             return bad("pinned", f64::from(self.pinned), "must be in [0, 3]");
+        }
+        if self.kept.is_some() && (self.tail.is_some() || self.mode == ContactMode::Sticking) {
+            return bad("kept", 0.0, "a kept flight is a free flight without a tail");
         }
         if self.mode == ContactMode::Sticking && self.tail.is_some() {
             return bad("tail", 0.0, "no chatter tail while sticking");

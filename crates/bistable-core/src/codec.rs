@@ -11,7 +11,7 @@
 //! checked when a simulator is rebuilt from the checkpoint
 //! ([`crate::Simulator::from_checkpoint`]).
 
-use crate::checkpoint::{Checkpoint, PlateRecord};
+use crate::checkpoint::{Checkpoint, KeptFlight, PlateRecord};
 use crate::events::{ContactMode, Impact, StickCause, Well};
 use crate::params::ChatterRule;
 use crate::shaker::MAX_POLY_DEGREE;
@@ -20,7 +20,7 @@ use crate::simulator::Stats;
 /// First bytes of a serialized checkpoint.
 pub const MAGIC: &[u8; 8] = b"BICHKPT\0";
 /// Format version of [`Checkpoint::to_bytes`]; bump on any layout change.
-pub const VERSION: u32 = 1;
+pub const VERSION: u32 = 2;
 
 /// Appends little-endian fields to a byte vector.
 #[derive(Debug, Default, Clone)]
@@ -255,6 +255,12 @@ pub fn put_checkpoint(w: &mut Writer, c: &Checkpoint) {
         w.f64(len);
         w.u8(cause_tag(cause));
     });
+    w.opt(c.kept, |w, k| {
+        [k.x0, k.v0, k.reach].iter().for_each(|&v| w.f64(v));
+        w.opt(k.anchor, |w, (s, x, v)| {
+            [s, x, v].iter().for_each(|&a| w.f64(a));
+        });
+    });
 }
 
 /// Reads the fields written by [`put_checkpoint`].
@@ -323,6 +329,14 @@ pub fn get_checkpoint(r: &mut Reader) -> Res<Checkpoint> {
         tail: r.opt("chatter tail", |r| {
             let len = r.f64()?;
             Ok((len, get_cause(r)?))
+        })?,
+        kept: r.opt("kept flight", |r| {
+            Ok(KeptFlight {
+                x0: r.f64()?,
+                v0: r.f64()?,
+                reach: r.f64()?,
+                anchor: r.opt("kept flight anchor", |r| Ok((r.f64()?, r.f64()?, r.f64()?)))?,
+            })
         })?,
     })
 }

@@ -40,7 +40,7 @@ pub mod units;
 
 pub use audit::GapAudit;
 pub use batch::{Batch, JoinError, LaneObserver};
-pub use checkpoint::{Checkpoint, PlateRecord};
+pub use checkpoint::{Checkpoint, KeptFlight, PlateRecord};
 pub use classify::{
     classify, classify_from, largest_lyapunov, Classification, ClassifyOptions, ClassifyRun,
     ResponseClass, Tracking,
@@ -50,7 +50,7 @@ pub use lane_run::{drive, LaneRun};
 pub use lanes::Width;
 pub use params::{ChatterRule, ParamError, Params, SolverOptions};
 pub use ramp::SetpointRamp;
-pub use sampled::{Sample, SampleHistory};
+pub use sampled::{PieceMemo, Sample, SampleHistory};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
 pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
 pub use simulator::{Observer, SimError, Simulator, State, Stats, StepView};

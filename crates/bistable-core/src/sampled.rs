@@ -155,16 +155,19 @@ impl SampleHistory {
 
     /// The samples usable for a piece ending at `end`, newest first: the newest one, then older
     /// ones while they are joined and spaced within `[h/4, 4h]`, `h = end − newest`.
-    fn usable(&self, end: Instant) -> Vec<Sample> {
-        let all: Vec<(Sample, bool)> = self.entries().collect();
-        let Some(&(newest, _)) = all.last() else {
-            return Vec::new();
+    fn usable(&self, end: Instant) -> Newest {
+        let mut out = Newest::default();
+        // The stored samples fill the first slots, oldest first.
+        let all = &self.samples[..self.len()];
+        let Some(&Some((newest, _))) = all.last() else {
+            return out;
         };
         let h = end.since(newest.t);
-        let mut out = vec![newest];
+        out.push(newest);
         for i in (1..all.len()).rev() {
-            let (newer, joined) = all[i];
-            let older = all[i - 1].0;
+            let (Some((newer, joined)), Some((older, _))) = (all[i], all[i - 1]) else {
+                break;
+            };
             let spacing = newer.t.since(older.t);
             if !(joined && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
@@ -176,28 +179,59 @@ impl SampleHistory {
 
     /// The samples a piece ending at `end` is built from, newest first (see the module
     /// documentation for the choice of their number).
-    fn nodes(&self, end: Instant) -> Vec<Sample> {
+    #[cfg(test)]
+    fn nodes(&self, end: Instant) -> Newest {
+        self.nodes_with(end, &PieceMemo::default())
+    }
+
+    /// [`SampleHistory::nodes`], with the table of the older samples from `memo` when it holds
+    /// it.
+    fn nodes_with(&self, end: Instant, memo: &PieceMemo) -> Newest {
         let mut usable = self.usable(end);
         let checkable = usable.len().saturating_sub(1).min(MAX_NODES);
         let mut best = (f64::INFINITY, 1);
-        for m in 1..=checkable {
-            let (newest, older) = (usable[0], &usable[1..=m]);
-            let c = hermite(older, older[0].t);
+        if checkable > 0 {
+            // The Hermite polynomials through the older samples share one table of divided
+            // differences (the table of the first nodes is a part of the table of more).
+            let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
+            let fresh;
+            let table = match memo.table_of(older) {
+                Some(t) => t,
+                None => {
+                    fresh = Table::of(older, older[0].t);
+                    &fresh
+                }
+            };
             let s = newest.t.since(older[0].t);
-            let (z, zd) = eval(&c, s);
-            let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
-            if m == 1 || miss <= best.0 / GAIN {
-                best = (miss, m);
+            for m in 1..=checkable {
+                let c = table.monomials(2 * m);
+                let (z, zd) = eval(&c, s);
+                let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
+                if m == 1 || miss <= best.0 / GAIN {
+                    best = (miss, m);
+                }
             }
         }
-        usable.truncate(best.1);
+        usable.n = usable.n.min(best.1);
         usable
     }
 
     /// The plate over `[newest sample, end]`, starting at the plate's current position and
     /// velocity `now = (z, ż)` at the newest sample's instant.
     pub fn piece(&self, end: Instant, now: (f64, f64)) -> Result<PolyPiece, ParamError> {
-        let nodes = self.nodes(end);
+        self.piece_with(end, now, &mut PieceMemo::default())
+    }
+
+    /// [`SampleHistory::piece`] (the same piece), keeping in `memo` the table of the nodes it
+    /// is built from: the next piece checks its orders on them.
+    pub fn piece_with(
+        &self,
+        end: Instant,
+        now: (f64, f64),
+        memo: &mut PieceMemo,
+    ) -> Result<PolyPiece, ParamError> {
+        let nodes = self.nodes_with(end, memo);
+        let nodes = nodes.as_slice();
         let Some(first) = nodes.first() else {
             return Err(refuse(
                 "plate_samples",
@@ -214,7 +248,9 @@ impl SampleHistory {
                 "end must be after the newest sample",
             ));
         }
-        let mut c = hermite(&nodes, start);
+        let table = Table::of(nodes, start);
+        let mut c = table.monomials(2 * nodes.len());
+        memo.keep(nodes, table);
         let (z_now, zd_now) = now;
         let (d0, d1) = (z_now - c[0], zd_now - c[1]);
         // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
@@ -226,6 +262,42 @@ impl SampleHistory {
         // Exactly where the plate is (`c0 + δ0` may round away from it).
         (c[0], c[1]) = (z_now, zd_now);
         PolyPiece::new(start, end, &c)
+    }
+}
+
+/// Up to [`MAX_SAMPLES`] samples, newest first.
+#[derive(Clone, Copy)]
+struct Newest {
+    s: [Sample; MAX_SAMPLES],
+    n: usize,
+}
+
+impl Default for Newest {
+    fn default() -> Self {
+        let none = Sample {
+            t: Instant::new(0.0),
+            z: 0.0,
+            zdot: 0.0,
+        };
+        Self {
+            s: [none; MAX_SAMPLES],
+            n: 0,
+        }
+    }
+}
+
+impl Newest {
+    fn push(&mut self, s: Sample) {
+        self.s[self.n] = s;
+        self.n += 1;
+    }
+
+    fn len(&self) -> usize {
+        self.n
+    }
+
+    fn as_slice(&self) -> &[Sample] {
+        &self.s[..self.n]
     }
 }
 
@@ -250,38 +322,117 @@ fn eval(c: &[f64; MAX_POLY_DEGREE + 1], s: f64) -> (f64, f64) {
 
 /// Monomial coefficients in `s = τ − origin` of the Hermite polynomial through `(z, ż)` at
 /// each node (degree `2·nodes − 1`), by divided differences on doubled nodes.
+#[cfg(test)]
 fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
-    let n = 2 * nodes.len();
-    let mut x = [0.0; MAX_POLY_DEGREE + 1];
-    let mut q = [0.0; MAX_POLY_DEGREE + 1];
-    for (i, s) in nodes.iter().enumerate() {
-        let xi = s.t.since(origin);
-        x[2 * i] = xi;
-        x[2 * i + 1] = xi;
-        q[2 * i] = s.z;
-        q[2 * i + 1] = s.z;
+    Table::of(nodes, origin).monomials(2 * nodes.len())
+}
+
+/// The table of divided differences of the nodes of the last piece built
+/// ([`SampleHistory::piece_with`]): the next piece checks its orders on the same samples, with
+/// the same numbers. Derived data, not part of a history's state (an empty memo gives the same
+/// pieces).
+#[derive(Clone, Copy, Default)]
+pub struct PieceMemo {
+    nodes: Newest,
+    table: Table,
+}
+
+impl PieceMemo {
+    /// The table of `nodes` (from the first one) if it is a part of the one kept: the same
+    /// samples, bit for bit (the table of the first `m` nodes is the start of the table of
+    /// more).
+    fn table_of(&self, nodes: &[Sample]) -> Option<&Table> {
+        let kept = self.nodes.as_slice();
+        let bits = |s: &Sample| {
+            let (hi, lo) = s.t.parts();
+            [hi, lo, s.z, s.zdot].map(f64::to_bits)
+        };
+        let same =
+            kept.len() >= nodes.len() && kept.iter().zip(nodes).all(|(a, b)| bits(a) == bits(b));
+        same.then_some(&self.table)
     }
-    // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i]; on a doubled node the
-    // first divided difference is the sample's velocity.
-    for j in 1..n {
-        for i in (j..n).rev() {
-            q[i] = if j == 1 && i % 2 == 1 {
-                nodes[i / 2].zdot
-            } else {
-                (q[i] - q[i - 1]) / (x[i] - x[i - j])
-            };
+
+    fn keep(&mut self, nodes: &[Sample], table: Table) {
+        self.nodes.s[..nodes.len()].copy_from_slice(nodes);
+        self.nodes.n = nodes.len();
+        self.table = table;
+    }
+}
+
+/// Divided differences on doubled nodes: `x` the nodes, `q[i] = f[x_0, …, x_i]`.
+#[derive(Clone, Copy, Default)]
+struct Table {
+    x: [f64; MAX_POLY_DEGREE + 1],
+    q: [f64; MAX_POLY_DEGREE + 1],
+}
+
+impl Table {
+    /// The table for `nodes` (at most [`MAX_NODES`]), in `s = τ − origin`. Its first `2m`
+    /// entries are the table of the first `m` nodes, the same numbers: entry `i` is computed
+    /// from entries `≤ i` alone.
+    fn of(nodes: &[Sample], origin: Instant) -> Self {
+        // Compiled for each number of nodes, so that the loops are unrolled.
+        match nodes.len() {
+            1 => Self::of_n::<2>(nodes, origin),
+            2 => Self::of_n::<4>(nodes, origin),
+            _ => Self::of_n::<6>(nodes, origin),
         }
     }
-    // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
-    let mut c = [0.0; MAX_POLY_DEGREE + 1];
-    c[0] = q[n - 1];
-    for j in (0..n - 1).rev() {
-        for k in (1..n).rev() {
-            c[k] = c[k - 1] - x[j] * c[k];
+
+    /// [`Table::of`] for `N / 2` nodes.
+    #[inline(always)]
+    fn of_n<const N: usize>(nodes: &[Sample], origin: Instant) -> Self {
+        let n = N;
+        let nodes = &nodes[..N / 2];
+        let mut x = [0.0; MAX_POLY_DEGREE + 1];
+        let mut q = [0.0; MAX_POLY_DEGREE + 1];
+        for (i, s) in nodes.iter().enumerate() {
+            let xi = s.t.since(origin);
+            x[2 * i] = xi;
+            x[2 * i + 1] = xi;
+            q[2 * i] = s.z;
+            q[2 * i + 1] = s.z;
         }
-        c[0] = q[j] - x[j] * c[0];
+        // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i]; on a doubled node
+        // the first divided difference is the sample's velocity.
+        for j in 1..n {
+            for i in (j..n).rev() {
+                q[i] = if j == 1 && i % 2 == 1 {
+                    nodes[i / 2].zdot
+                } else {
+                    (q[i] - q[i - 1]) / (x[i] - x[i - j])
+                };
+            }
+        }
+        Self { x, q }
     }
-    c
+
+    /// Monomial coefficients of the interpolant through the first `n` (even) entries.
+    fn monomials(&self, n: usize) -> [f64; MAX_POLY_DEGREE + 1] {
+        // Compiled for each `n`, so that the loops are unrolled and `c` stays in registers.
+        match n {
+            2 => self.monomials_n::<2>(),
+            4 => self.monomials_n::<4>(),
+            _ => self.monomials_n::<6>(),
+        }
+    }
+
+    /// [`Table::monomials`] for `n = N`.
+    #[inline(always)]
+    fn monomials_n<const N: usize>(&self) -> [f64; MAX_POLY_DEGREE + 1] {
+        let n = N;
+        let (x, q) = (&self.x, &self.q);
+        // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
+        let mut c = [0.0; MAX_POLY_DEGREE + 1];
+        c[0] = q[n - 1];
+        for j in (0..n - 1).rev() {
+            for k in (1..n).rev() {
+                c[k] = c[k - 1] - x[j] * c[k];
+            }
+            c[0] = q[j] - x[j] * c[0];
+        }
+        c
+    }
 }
 
 /// Why [`taylor_piece`] refused a piece.
@@ -467,6 +618,90 @@ mod tests {
         let mut nan = sine(0.3);
         nan.zdot = f64::NAN;
         assert!(h2.push(nan).is_err());
+    }
+
+    #[test]
+    fn one_table_gives_each_order_the_bits_of_its_own() {
+        // The interpolant through the first m nodes from the table of all of them equals, bit
+        // for bit, the one from a table of those m nodes alone (divided differences, then
+        // monomials, as computed before the table was shared).
+        fn alone(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
+            let n = 2 * nodes.len();
+            let mut x = [0.0; MAX_POLY_DEGREE + 1];
+            let mut q = [0.0; MAX_POLY_DEGREE + 1];
+            for (i, s) in nodes.iter().enumerate() {
+                let xi = s.t.since(origin);
+                (x[2 * i], x[2 * i + 1]) = (xi, xi);
+                (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
+            }
+            for j in 1..n {
+                for i in (j..n).rev() {
+                    q[i] = if j == 1 && i % 2 == 1 {
+                        nodes[i / 2].zdot
+                    } else {
+                        (q[i] - q[i - 1]) / (x[i] - x[i - j])
+                    };
+                }
+            }
+            let mut c = [0.0; MAX_POLY_DEGREE + 1];
+            c[0] = q[n - 1];
+            for j in (0..n - 1).rev() {
+                for k in (1..n).rev() {
+                    c[k] = c[k - 1] - x[j] * c[k];
+                }
+                c[0] = q[j] - x[j] * c[0];
+            }
+            c
+        }
+        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
+        };
+        for _ in 0..2000 {
+            let t0 = 100.0 * rnd();
+            let mut nodes = [sine(0.0); MAX_NODES];
+            for (k, n) in nodes.iter_mut().enumerate() {
+                *n = Sample {
+                    t: Instant::new(t0 - (k as f64) * (0.01 + 0.001 * rnd())),
+                    z: rnd(),
+                    zdot: rnd(),
+                };
+            }
+            let table = Table::of(&nodes, nodes[0].t);
+            for m in 1..=MAX_NODES {
+                let (a, b) = (table.monomials(2 * m), alone(&nodes[..m], nodes[0].t));
+                assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "m = {m}");
+            }
+        }
+    }
+
+    #[test]
+    fn pieces_with_a_memo_are_the_pieces_without() {
+        let (mut hist, mut memo) = (SampleHistory::new(), PieceMemo::default());
+        for k in 0..400 {
+            // Smooth, then a jump, then noise, with a few uneven spacings.
+            let t = k as f64 * 0.01 + if k % 37 == 0 { 0.004 } else { 0.0 };
+            let mut s = sine(t);
+            if k >= 150 {
+                s.z += 0.3;
+            }
+            if k >= 250 {
+                s.z += 1e-5 * ((k * 7919) % 13) as f64;
+            }
+            hist.push(s).unwrap();
+            let end = Instant::new(t + 0.01);
+            let now = (s.z + 1e-9, s.zdot);
+            let a = hist.piece(end, now).unwrap();
+            let b = hist.piece_with(end, now, &mut memo).unwrap();
+            assert_eq!(
+                a.coeffs().map(f64::to_bits),
+                b.coeffs().map(f64::to_bits),
+                "k = {k}"
+            );
+        }
     }
 
     #[test]

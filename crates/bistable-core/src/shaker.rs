@@ -316,6 +316,16 @@ impl PlateEval {
         }
     }
 
+    /// Makes this the evaluation of the piece `p` (the same as `PlateEval::new(p.into())`,
+    /// without rebuilding the magnitudes when they are already a piece's zeros).
+    pub(crate) fn set_piece(&mut self, p: PolyPiece) {
+        if !matches!(self.plate, PlateMotion::Poly(_)) {
+            self.mags = [0.0; BUF];
+        }
+        self.plate = PlateMotion::Poly(p);
+        self.last = None;
+    }
+
     /// The plate motion evaluated.
     pub(crate) fn law(&self) -> &PlateMotion {
         &self.plate

@@ -10,7 +10,7 @@ use std::fmt;
 use std::ops::ControlFlow;
 
 use crate::chatter;
-use crate::checkpoint::{Checkpoint, PlateRecord};
+use crate::checkpoint::{Checkpoint, KeptFlight, PlateRecord};
 use crate::events::{ContactMode, Event, Impact, StickCause, Well};
 use crate::law::{self, Contact};
 use crate::params::{check, ParamError, Params, SolverOptions};
@@ -18,7 +18,7 @@ use crate::potential::{self, BARRIER};
 use crate::roots::{first_root, first_root_from};
 #[cfg(doc)]
 use crate::shaker::Sinusoid;
-use crate::shaker::{PlateEval, PlateMotion};
+use crate::shaker::{PlateEval, PlateMotion, PolyPiece};
 use crate::taylor::{self, eval, eval_d, FlightSeries, VariationSeries, BUF};
 use crate::time::Instant;
 
@@ -276,6 +276,60 @@ struct Step {
     /// Gap and gap rate at the end of a free step, when a batch computed them with the step
     /// (the values `finish_step` would compute).
     end_gap: Option<(f64, f64)>,
+    /// How far from the step's start the series of `x` holds (its step size before a plate
+    /// piece's end limited it); zero for a step on the plate.
+    reach: f64,
+    /// The plate changed since the step was computed (later pieces continue it, see
+    /// [`Simulator::keep_flight`]): `series.u` is stale, only `series.x` holds.
+    kept: bool,
+    /// Bounds over the whole reach, for continuing the step across plate pieces.
+    guard: Option<Guard>,
+}
+
+/// What a free step's series allows to conclude cheaply over its whole reach, for continuing
+/// it under a new plate piece ([`Simulator::continue_plate`]).
+#[derive(Clone, Copy)]
+struct Guard {
+    /// The series stays moderate (`Σ|x_k| reach^k` and the bound below finite and below
+    /// `1e100`) and the barrier out of reach ([`barrier_far`]) over the whole reach.
+    usable: bool,
+    /// `Σ k(k−1)|x_k| reach^(k−2) ≥ |x''|` over the reach.
+    accel: f64,
+    /// `Σ|x_k| reach^k ≥ |x|` over the reach (also for the rounding margin).
+    size: f64,
+    /// `Σ k|x_k| reach^(k−1) ≥ |x'|` over the reach.
+    speed: f64,
+    /// `(s, x(s), x'(s))` at the last point where the series was evaluated for a bound.
+    anchor: Option<(f64, f64, f64)>,
+}
+
+impl Guard {
+    /// The bounds of the series `x` over `[0, reach]`.
+    fn of(x: &[f64], reach: f64, well: Well, on_barrier: bool) -> Self {
+        let (mut size, mut hk) = (x[0].abs(), 1.0);
+        for &xk in &x[1..] {
+            hk *= reach;
+            size += xk.abs() * hk;
+        }
+        let (mut speed, mut hk) = (0.0, 1.0);
+        for (k, &xk) in x.iter().enumerate().skip(1) {
+            speed += k as f64 * xk.abs() * hk;
+            hk *= reach;
+        }
+        let (mut accel, mut hk) = (0.0, 1.0);
+        for (k, &xk) in x.iter().enumerate().skip(2) {
+            accel += (k * (k - 1)) as f64 * xk.abs() * hk;
+            hk *= reach;
+        }
+        let far = barrier_far(well, on_barrier, x, reach);
+        Self {
+            usable: far && size < 1e100 && speed < 1e100 && accel < 1e100,
+            accel,
+            size,
+            speed,
+            anchor: None,
+        }
+    }
 }
 
 /// Where an advance stands after [`Simulator::resume`].
@@ -321,6 +375,8 @@ pub struct Simulator {
     /// Variational state, when enabled: `Φ(t0)` and, for the current free step, the series of
     /// its two columns' `δx`.
     var: Option<Variational>,
+    /// Free flights go on across plate pieces (see [`Simulator::keep_flight`]).
+    keep_flight: bool,
 }
 
 /// The variational matrix `Φ = ∂(x, x')(t)/∂(x, x')(t_e)` from the instant `t_e` it was enabled.
@@ -436,6 +492,9 @@ impl Simulator {
                 riding: false,
                 series: FlightSeries::default(),
                 end_gap: None,
+                reach: 0.0,
+                kept: false,
+                guard: None,
             },
             live: false,
             now: t0,
@@ -445,7 +504,19 @@ impl Simulator {
             empty_steps: 0,
             stats: Stats::default(),
             var: None,
+            keep_flight: false,
         }
+    }
+
+    /// With `on`, a free flight goes on across the pieces of a piecewise plate: a step that a
+    /// piece's end cut short stays the current step at that end, and [`Simulator::set_plate`]
+    /// with the next piece keeps its series (the mass's flight does not depend on the plate)
+    /// when a bound shows that the gap stays open over the new piece; only a piece that may
+    /// hold an event restarts the integration. Without it (the default) every piece restarts
+    /// it. The trajectories of the two differ by rounding. Not part of a [`Checkpoint`]: set it
+    /// again on a simulator rebuilt from one.
+    pub fn keep_flight(&mut self, on: bool) {
+        self.keep_flight = on;
     }
 
     /// Model parameters.
@@ -634,7 +705,7 @@ impl Simulator {
                 return Ok(Progress::Stopped(true));
             }
             let step_end = self.t0 + len;
-            if step_end > target {
+            if step_end > target || self.cut_at_horizon() {
                 self.now = target;
                 return Ok(Progress::Stopped(true));
             }
@@ -679,6 +750,11 @@ impl Simulator {
     /// into it); a mass riding the plate stays on it and moves with the new velocity while the
     /// contact force is non-negative, and is released at once if the new motion pulls away.
     pub fn set_plate(&mut self, plate: PlateMotion) -> Result<(), SimError> {
+        if let PlateMotion::Poly(piece) = &plate {
+            if self.keep_flight && self.continue_flight(piece, false, f64::INFINITY) {
+                return Ok(());
+            }
+        }
         let now = self.now;
         if let Some(h) = plate.horizon() {
             if h < now {
@@ -700,6 +776,127 @@ impl Simulator {
         self.plate = PlateEval::new(plate);
         self.restart_at_now(&st, z, zd);
         Ok(())
+    }
+
+    /// Takes `piece` as the plate and moves to its end, if flights are kept across pieces
+    /// ([`Simulator::keep_flight`]) and the current free flight covers the whole piece without
+    /// an event: the state is then the one [`Simulator::set_plate`] and an advance to the
+    /// piece's end give. Otherwise returns `false` and changes nothing.
+    ///
+    /// `limit` bounds what the stretch may reach: the bounds used for `|x|`, `|x'|`, `|x''|`
+    /// over the step and for `|z|`, `|ż|`, `|z̈|` over the piece must not exceed it (a host that
+    /// skips its checks of the state after such a stretch chooses it so that they hold).
+    pub fn fly_over(&mut self, piece: &PolyPiece, limit: f64) -> bool {
+        if !(self.keep_flight && self.continue_flight(piece, true, limit)) {
+            return false;
+        }
+        self.now = piece.end();
+        true
+    }
+
+    /// The current step is a free flight that the plate piece's end cut short (its series goes
+    /// on past it) and flights are kept across pieces: an advance stops there without ending
+    /// the step (no advance goes past the piece's end). Not a step of length zero (a
+    /// checkpoint does not keep one: it is computed again when needed).
+    fn cut_at_horizon(&self) -> bool {
+        self.keep_flight
+            && !self.step.riding
+            && self.step.end == StepEnd::Plain
+            && self.step.len > 0.0
+            && self.step.len < self.step.reach
+            && self.plate.law().horizon().is_some()
+    }
+
+    /// Continues the current free step under `piece`, which starts now, at the end of the
+    /// piece that cut the step short: the series of `x` is kept and the step goes on to the
+    /// new piece's end (or its reach, `whole`: only if it reaches the piece's end), if the gap
+    /// `x − z` is shown to stay open over that stretch by bounds (the last evaluation of the
+    /// series and `|x''|` over the step for the mass, the piece's coefficients for the plate)
+    /// and the barrier is out of reach over the whole step (a bound that fails from the last
+    /// evaluation is tried again from one now, which becomes the last). Returns whether it
+    /// did; otherwise only the last evaluation may change. The outcome depends on the step,
+    /// the piece and the last evaluation, which a checkpoint of a kept step records, so a
+    /// simulator rebuilt from one decides the same way.
+    fn continue_flight(&mut self, piece: &PolyPiece, whole: bool, limit: f64) -> bool {
+        if !self.live
+            || self.mode != ContactMode::Free
+            || self.var.is_some()
+            || !self.cut_at_horizon()
+        {
+            return false;
+        }
+        let now = self.now;
+        if self.plate.law().horizon() != Some(now) || piece.start() != now {
+            return false;
+        }
+        let t0 = self.t0;
+        let reach = self.step.reach;
+        let sa = now.since(t0);
+        let room = piece.end().since(t0);
+        let len = room.min(reach);
+        // NaN fails every comparison: nothing is continued then.
+        let fits = len > sa && (room < reach || !whole);
+        if !fits {
+            return false;
+        }
+        let c = piece.coeffs();
+        let z_old = self.plate.law().motion(now).0;
+        let continuous = (c[0] - z_old).abs() <= 1e-12 * z_old.abs().max(1.0);
+        if !continuous {
+            return false;
+        }
+        let (well, on_barrier) = (self.well, self.on_barrier);
+        let step = &mut self.step;
+        let x = &step.series.x[..=self.order + 1];
+        let guard = step
+            .guard
+            .get_or_insert_with(|| Guard::of(x, reach, well, on_barrier));
+        // The plate over the stretch, σ = s − sa ∈ [0, hw]: z ≤ c0 + c1 σ + q σ².
+        let hw = len - sa;
+        let (mut q, mut hk) = (0.0, 1.0);
+        for &ck in &c[2..] {
+            q += ck.abs() * hk;
+            hk *= hw;
+        }
+        let plate = c[0].abs() + c[1].abs() * hw + q * hw * hw;
+        let plate_rate = c[1].abs() + 5.0 * q * hw;
+        let bounded = [
+            guard.size,
+            guard.speed,
+            guard.accel,
+            plate,
+            plate_rate,
+            20.0 * q,
+        ]
+        .iter()
+        .all(|&b| b <= limit);
+        if !(guard.usable && bounded) {
+            return false;
+        }
+        let margin = 1e-10 * (1.0 + guard.size + c[0].abs());
+        // The mass from the last evaluation at s_ref ≤ sa: x ≥ x_ref + v_ref (s − s_ref) −
+        // accel (s − s_ref)²/2, the linear part smallest at an end of the stretch.
+        let from_anchor = guard.anchor.is_some_and(|(s_ref, xa, va)| {
+            let (d1, d2) = (sa - s_ref, len - s_ref);
+            let low = xa + (va * d1).min(va * d2) - 0.5 * guard.accel * d2 * d2;
+            let high = c[0] + (c[1] * hw).max(0.0) + q * hw * hw;
+            d1 >= 0.0 && low - high > margin
+        });
+        if !from_anchor {
+            // From the mass now: gap ≥ (x − c0) + min(0, (v − c1) hw) − (accel/2 + q) hw².
+            let (xa, va) = eval_d(x, sa);
+            guard.anchor = Some((sa, xa, va));
+            let low = (xa - c[0]) + ((va - c[1]) * hw).min(0.0) - (0.5 * guard.accel + q) * hw * hw;
+            let open = low > margin;
+            if !open {
+                return false;
+            }
+        }
+        self.plate.set_piece(*piece);
+        self.step.len = len;
+        self.step.end = StepEnd::Plain;
+        self.step.kept = true;
+        true
     }
 
     /// Makes the current time the start of a fresh step, with the plate at `(z, zd)` now.
@@ -854,6 +1051,12 @@ impl Simulator {
             short_flights: self.short_flights,
             stats: self.stats,
             tail,
+            kept: (self.live && self.step.kept).then(|| KeptFlight {
+                x0: self.step.series.x[0],
+                v0: self.step.series.x[1],
+                reach: self.step.reach,
+                anchor: self.step.guard.and_then(|g| g.anchor),
+            }),
         }
     }
 
@@ -879,7 +1082,9 @@ impl Simulator {
         sim.short_flights = c.short_flights;
         sim.stats = c.stats;
         sim.live = false;
-        if let Some((len, cause)) = c.tail {
+        if let Some(k) = c.kept {
+            sim.restore_kept(&k)?;
+        } else if let Some((len, cause)) = c.tail {
             sim.step.len = len;
             sim.step.end = StepEnd::Stick(cause);
             sim.step.riding = true;
@@ -892,6 +1097,68 @@ impl Simulator {
             sim.live = true;
         }
         Ok(sim)
+    }
+
+    /// Rebuilds a free step that later plate pieces continued ([`Simulator::keep_flight`]): its
+    /// series from the mass's position and velocity at its start (the same coefficients: the
+    /// series of `x` does not depend on the plate), up to the current piece's end or its reach.
+    fn restore_kept(&mut self, k: &KeptFlight) -> Result<(), SimError> {
+        let bad = |name, value, rule| SimError::Param(ParamError { name, value, rule });
+        let PlateMotion::Poly(piece) = *self.plate.law() else {
+            return Err(bad("kept", 0.0, "a kept flight needs a plate piece"));
+        };
+        if self.mode != ContactMode::Free || self.var.is_some() {
+            return Err(bad("kept", 0.0, "a kept flight is a free flight"));
+        }
+        if !(k.x0.is_finite() && k.v0.is_finite() && k.reach > 0.0 && k.reach <= taylor::MAX_STEP) {
+            return Err(bad("kept", k.reach, "must be finite, with reach in (0, 8]"));
+        }
+        let (start, room) = (piece.start().since(self.t0), piece.end().since(self.t0));
+        let len = room.min(k.reach);
+        let anchored = k
+            .anchor
+            .is_none_or(|(s, x, v)| s >= 0.0 && s <= start && x.is_finite() && v.is_finite());
+        if !(start > 0.0 && len > start && self.now.since(self.t0) <= room && anchored) {
+            return Err(bad(
+                "kept",
+                start,
+                "the plate piece must start inside the kept flight and hold the current time",
+            ));
+        }
+        let p = self.order;
+        let zero = [0.0; BUF];
+        taylor::flight(
+            self.params.zeta(),
+            k.x0,
+            k.v0,
+            &zero,
+            p,
+            &mut self.step.series,
+            None,
+        );
+        if !self.step.series.x[..=p + 1].iter().all(|c| c.is_finite()) {
+            return Err(SimError::NonFinite {
+                t: self.t0.to_f64(),
+            });
+        }
+        let step = &mut self.step;
+        step.len = len;
+        step.end = StepEnd::Plain;
+        step.riding = false;
+        step.end_gap = None;
+        step.reach = k.reach;
+        step.kept = true;
+        step.guard = k.anchor.map(|a| Guard {
+            anchor: Some(a),
+            ..Guard::of(
+                &step.series.x[..=p + 1],
+                k.reach,
+                self.well,
+                self.on_barrier,
+            )
+        });
+        self.live = true;
+        Ok(())
     }
 
     /// Advances to `t` and returns the events on the way.
@@ -920,6 +1187,9 @@ impl Simulator {
         let step = &mut self.step;
         step.len = 0.0;
         step.end_gap = None;
+        step.reach = 0.0;
+        step.kept = false;
+        step.guard = None;
         match self.mode {
             ContactMode::Free => {
                 step.riding = false;
@@ -960,7 +1230,8 @@ impl Simulator {
                 if let Some(v) = self.var.as_mut() {
                     v.take_reseed();
                 }
-                let h = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol, ln_tol).min(room);
+                let reach = taylor::step_size(&[&s.x[..=p], &s.u[..=p]], p, tol, ln_tol);
+                let h = reach.min(room);
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
@@ -968,6 +1239,7 @@ impl Simulator {
                 // barrier over `h`, so over any shorter step too.
                 let far = barrier_far(self.well, self.on_barrier, &s.x[..=p + 1], h);
                 self.end_free_step(m, h, false, far, None);
+                self.step.reach = reach;
             }
             ContactMode::Sticking => {
                 step.riding = true;
@@ -1102,6 +1374,8 @@ impl Simulator {
         step.len = 0.0;
         step.end_gap = None;
         step.riding = false;
+        step.kept = false;
+        step.guard = None;
         // The kernel's Bernstein coefficients are those of the whole gap, so not of the gap
         // divided by `s` when the step leaves the plate.
         let mut bernstein = (!out.clear && !leaving).then_some([0.0; BUF]);
@@ -1115,6 +1389,7 @@ impl Simulator {
         }
         let bernstein = bernstein.as_ref().map(|b| &b[..=self.order + 1]);
         self.end_free_step(usize::from(leaving), out.h, out.clear, out.far, bernstein);
+        self.step.reach = out.h;
         if out.clear && out.far {
             self.step.end_gap = Some(out.end_gap);
         }
@@ -1155,8 +1430,16 @@ impl Simulator {
             if let Some(v) = self.var.as_mut() {
                 v.phi = v.cols.phi_at(p + 1, step.len);
             }
-            step.end_gap
-                .unwrap_or_else(|| eval_d(&step.series.u[..=p + 1], step.len))
+            step.end_gap.unwrap_or_else(|| {
+                if step.kept {
+                    // Continued under later plate pieces: the gap from `x` and the plate now.
+                    let (x, v) = eval_d(&step.series.x[..=p + 1], step.len);
+                    let (z, zd, _) = self.plate.law().motion(t1);
+                    (x - z, v - zd)
+                } else {
+                    eval_d(&step.series.u[..=p + 1], step.len)
+                }
+            })
         };
         let end = step.end;
         if !(u1.is_finite() && w1.is_finite()) {
@@ -1288,6 +1571,8 @@ impl Simulator {
         self.step.len = len;
         self.step.end = StepEnd::Stick(cause);
         self.step.riding = true;
+        self.step.reach = 0.0;
+        self.step.kept = false;
         self.live = true;
     }
 }

@@ -100,3 +100,102 @@ fn switching_sinusoid_keeps_the_plate_continuous() {
     assert!(!impacts(&ev).is_empty());
     assert!(sim.state().gap() >= 0.0);
 }
+
+/// The baseline sinusoid as cubic Hermite pieces of length `h`, piece `k` over `[kh, (k+1)h]`.
+fn sinusoid_piece(h: f64, k: u32) -> PolyPiece {
+    let shaker = PlateMotion::from(Sinusoid::new(1.75, 0.07).unwrap());
+    let (a, b) = (
+        Instant::new(f64::from(k) * h),
+        Instant::new(f64::from(k + 1) * h),
+    );
+    let (za, zda, _) = shaker.motion(a);
+    let (zb, zdb, _) = shaker.motion(b);
+    PolyPiece::hermite(a, b, (za, zda), (zb, zdb)).unwrap()
+}
+
+/// Runs pieces `from..to` of length `h` on `sim`, with `fly_over` first when `fly`, recording
+/// the state at each piece's end and the events.
+fn run_pieces(
+    sim: &mut Simulator,
+    h: f64,
+    from: u32,
+    to: u32,
+    fly: bool,
+) -> (Vec<[f64; 4]>, Vec<Event>) {
+    let (mut states, mut ev) = (Vec::new(), Vec::new());
+    for k in from..to {
+        let piece = sinusoid_piece(h, k);
+        if k > 0 && !(fly && sim.fly_over(&piece, f64::INFINITY)) {
+            sim.set_plate(piece.into()).unwrap();
+        }
+        sim.advance_instant(piece.end(), &mut |e: &Event| ev.push(*e))
+            .unwrap();
+        let s = sim.state();
+        states.push([s.x, s.v, s.z, s.zdot]);
+    }
+    (states, ev)
+}
+
+#[test]
+fn kept_flights_follow_the_restarted_run_and_restore_bit_for_bit() {
+    let (h, n) = (0.01, 10_000);
+    let start = || {
+        Simulator::new(
+            Params::paper(),
+            sinusoid_piece(h, 0).into(),
+            SolverOptions::default(),
+        )
+        .unwrap()
+    };
+    // Restarted at every piece (the default) and kept across pieces: the same impacts, the
+    // states within rounding amplified by the transient, far fewer steps.
+    let mut restarted = start();
+    let (a, ev_a) = run_pieces(&mut restarted, h, 0, n, false);
+    let mut kept = start();
+    kept.keep_flight(true);
+    let (b, ev_b) = run_pieces(&mut kept, h, 0, n, false);
+    let (ia, ib) = (impacts(&ev_a), impacts(&ev_b));
+    assert_eq!(ia.len(), ib.len());
+    assert!(ia.len() > 20);
+    let dt = ia
+        .iter()
+        .zip(&ib)
+        .map(|(p, q)| (p.t - q.t).abs())
+        .fold(0.0, f64::max);
+    let dx = a
+        .iter()
+        .zip(&b)
+        .map(|(p, q)| (p[0] - q[0]).abs())
+        .fold(0.0, f64::max);
+    assert!(dt < 1e-12 && dx < 1e-12, "impact times {dt:e}, x {dx:e}");
+    // The plate is the same pieces: bit for bit.
+    assert!(a.iter().zip(&b).all(|(p, q)| p[2] == q[2] && p[3] == q[3]));
+    let (sa, sb) = (restarted.stats().steps, kept.stats().steps);
+    assert!(sb * 10 < sa, "steps: restarted {sa}, kept {sb}");
+    // fly_over is set_plate and an advance, when it applies.
+    let mut flown = start();
+    flown.keep_flight(true);
+    let (c, ev_c) = run_pieces(&mut flown, h, 0, n, true);
+    assert_eq!(b, c);
+    assert_eq!(ev_b, ev_c);
+    // A checkpoint inside a kept flight (and its bytes) goes on bit for bit.
+    let mut sim = start();
+    sim.keep_flight(true);
+    let mut checked = 0;
+    for k in (0..n).step_by(997) {
+        run_pieces(&mut sim, h, k, k + 997, true);
+        let cp = sim.checkpoint();
+        checked += usize::from(cp.kept.is_some());
+        let bytes = cp.to_bytes();
+        let cp = bistable_core::Checkpoint::from_bytes(&bytes).unwrap();
+        let mut back = Simulator::from_checkpoint(&cp).unwrap();
+        back.keep_flight(true);
+        let mut twin = sim.clone();
+        let to = (k + 997 + 300).min(n + 300);
+        let (p, ev_p) = run_pieces(&mut twin, h, k + 997, to, true);
+        let (q, ev_q) = run_pieces(&mut back, h, k + 997, to, true);
+        assert_eq!(p, q);
+        assert_eq!(ev_p, ev_q);
+    }
+    assert!(checked >= 5, "{checked} checkpoints inside kept flights");
+}
