@@ -34,6 +34,10 @@
 //! `#[command(flatten)] pub common: CommonArgs` and a `pub fn run(args: &FooArgs) ->
 //! Result<(), CliError>`, then add a variant to [`Command`] and a line to [`main`].
 
+// The arguments' doc comments are their --help texts, where <stem> and <FILE> name placeholders,
+// not HTML tags.
+#![allow(rustdoc::invalid_html_tags)]
+
 mod atlas;
 mod basins;
 mod bifurcation;

@@ -125,7 +125,7 @@ pub struct SimulateArgs {
     pub periods: Option<f64>,
 
     /// Write one row per impact to FILE.csv, and sticking intervals and snap-throughs to
-    /// `<stem>_sticking.csv` and `<stem>_snaps.csv` next to it (formats below).
+    /// <stem>_sticking.csv and <stem>_snaps.csv next to it (formats below).
     #[arg(long, value_name = "FILE.csv", help_heading = "Output")]
     pub impacts: Option<PathBuf>,
 
