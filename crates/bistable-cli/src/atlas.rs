@@ -47,7 +47,7 @@ the cells of a 'bistable map' CSV when --map is given (its grid sets the axes;
 else the curves do). With --map the summary also reports the check of issue
 22: of the pairs of horizontally or vertically adjacent map cells with periods
 1 and 2, the fraction whose joining segment a P-1 → P-2 curve crosses (over the
-whole map, and over the pairs within the V span of those curves).";
+whole map, and over the pairs within the Ω × V box those curves span).";
 
 /// Shown after the options by `bistable atlas --help`.
 pub const AFTER_HELP: &str = "\
@@ -58,8 +58,8 @@ CSV (--out): one row per curve point,
 fixed point at plate phase 0; points ordered by the curve, low V end first).
 The summary (--json) lists per curve its start (the point located at
 --velocity), points, and the Ω and V it spans; with --map, \"map_check\": pairs,
-crossed, fraction, velocity_span, pairs_in_span, crossed_in_span,
-fraction_in_span.
+crossed, fraction, omega_span, velocity_span, pairs_in_span,
+crossed_in_span, fraction_in_span.
 
 Exit codes: 0 success; 2 invalid options; 1 a simulation failed or a file could
 not be written.
@@ -173,9 +173,11 @@ struct MapCheck {
     crossed: usize,
     /// `crossed / pairs` (NaN without pairs).
     fraction: f64,
+    /// The Ω the curves span.
+    omega_span: (f64, f64),
     /// The V the curves span.
     velocity_span: (f64, f64),
-    /// The pairs whose segment's midpoint lies in `velocity_span`.
+    /// The pairs whose segment's midpoint lies in `omega_span × velocity_span`.
     pairs_in_span: usize,
     /// Those crossed.
     crossed_in_span: usize,
@@ -328,7 +330,13 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
             points: c.iter().map(|q| (q.omega, q.velocity)).collect(),
         }),
     );
-    let map_check = map.as_ref().map(|(_, records)| separation(records, &lines));
+    let map_check = map.as_ref().map(|(_, records)| {
+        let cells: Vec<(f64, f64, Option<u32>)> = records
+            .iter()
+            .map(|r| (r.omega, r.velocity, r.period))
+            .collect();
+        separation(&cells, &lines)
+    });
     if let Some(path) = &args.plot {
         let sources = std::iter::once(format!("from V = {}", args.velocity))
             .chain(args.curves.iter().map(|p| p.display().to_string()))
@@ -419,10 +427,13 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
     if let Some(c) = &summary.map_check {
         text.push_str(&format!(
             "P-1/P-2 neighbour pairs of the map crossed by a P-1 → P-2 curve: {} of {} \
-             ({:.1}%); within the curves' V span {:.4}..{:.4}: {} of {} ({:.1}%)\n",
+             ({:.1}%); within the curves' span Ω {:.4}..{:.4}, V {:.4}..{:.4}: {} of {} \
+             ({:.1}%)\n",
             c.crossed,
             c.pairs,
             100.0 * c.fraction,
+            c.omega_span.0,
+            c.omega_span.1,
             c.velocity_span.0,
             c.velocity_span.1,
             c.crossed_in_span,
@@ -504,7 +515,7 @@ fn read_map(path: &Path) -> Result<(PathBuf, Vec<Record>), CliError> {
 }
 
 /// The distinct values of `key` over `records`, ascending.
-fn axis(records: &[Record], key: fn(&Record) -> f64) -> Vec<f64> {
+fn axis<T>(records: &[T], key: impl Fn(&T) -> f64) -> Vec<f64> {
     let mut v: Vec<f64> = records.iter().map(key).collect();
     v.sort_by(f64::total_cmp);
     v.dedup();
@@ -532,33 +543,34 @@ fn crosses(a: (f64, f64), b: (f64, f64), c: (f64, f64), d: (f64, f64)) -> bool {
     side(c, d, a) * side(c, d, b) <= 0.0 && side(a, b, c) * side(a, b, d) <= 0.0
 }
 
-/// How the P-1 → P-2 curves of `lines` separate the P-1 and P-2 cells of a map's `records`.
-fn separation(records: &[Record], lines: &[Line]) -> MapCheck {
+/// How the P-1 → P-2 curves of `lines` separate the P-1 and P-2 cells of a map given as
+/// `(Ω, V, period)` per cell.
+fn separation(cells: &[(f64, f64, Option<u32>)], lines: &[Line]) -> MapCheck {
     let pd: Vec<&[(f64, f64)]> = lines
         .iter()
         .filter(|l| l.kind == Kind::PeriodDoubling && l.period == 1)
         .map(|l| l.points.as_slice())
         .collect();
-    let (ws, vs) = (axis(records, |r| r.omega), axis(records, |r| r.velocity));
+    let (ws, vs) = (axis(cells, |c| c.0), axis(cells, |c| c.1));
     let index = |v: &[f64], x: f64| v.binary_search_by(|p| p.total_cmp(&x)).ok();
-    let mut cells = std::collections::HashMap::new();
-    for r in records {
-        if let (Some(i), Some(j), Some(p @ (1 | 2))) =
-            (index(&ws, r.omega), index(&vs, r.velocity), r.period)
-        {
-            cells.insert((i, j), (p, (r.omega, r.velocity)));
+    let mut grid = std::collections::HashMap::new();
+    for &(w, v, period) in cells {
+        if let (Some(i), Some(j), Some(p @ (1 | 2))) = (index(&ws, w), index(&vs, v), period) {
+            grid.insert((i, j), (p, (w, v)));
         }
     }
-    let span = pd
-        .iter()
-        .flat_map(|l| l.iter().map(|q| q.1))
-        .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-            (a.min(v), b.max(v))
-        });
+    let span = |key: fn(&(f64, f64)) -> f64| {
+        pd.iter()
+            .flat_map(|l| l.iter().map(key))
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
+                (a.min(v), b.max(v))
+            })
+    };
+    let (sw, sv) = (span(|q| q.0), span(|q| q.1));
     let (mut pairs, mut crossed, mut pairs_in, mut crossed_in) = (0, 0, 0, 0);
-    for (&(i, j), &(p, a)) in &cells {
+    for (&(i, j), &(p, a)) in &grid {
         for n in [(i + 1, j), (i, j + 1)] {
-            let Some(&(q, b)) = cells.get(&n) else {
+            let Some(&(q, b)) = grid.get(&n) else {
                 continue;
             };
             if p == q {
@@ -567,8 +579,8 @@ fn separation(records: &[Record], lines: &[Line]) -> MapCheck {
             let hit = pd
                 .iter()
                 .any(|l| l.windows(2).any(|s| crosses(a, b, s[0], s[1])));
-            let mid = 0.5 * (a.1 + b.1);
-            let inside = span.0 <= mid && mid <= span.1;
+            let mid = (0.5 * (a.0 + b.0), 0.5 * (a.1 + b.1));
+            let inside = (sw.0..=sw.1).contains(&mid.0) && (sv.0..=sv.1).contains(&mid.1);
             pairs += 1;
             crossed += usize::from(hit);
             pairs_in += usize::from(inside);
@@ -586,7 +598,8 @@ fn separation(records: &[Record], lines: &[Line]) -> MapCheck {
         pairs,
         crossed,
         fraction: ratio(crossed, pairs),
-        velocity_span: span,
+        omega_span: sw,
+        velocity_span: sv,
         pairs_in_span: pairs_in,
         crossed_in_span: crossed_in,
         fraction_in_span: ratio(crossed_in, pairs_in),
@@ -681,4 +694,41 @@ fn draw_alone(
         plot::draw_thresholds(root, &chart, e)?;
         draw_lines(&mut chart, lines)
     })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn separation_counts_the_p1_p2_pairs_a_period_doubling_curve_crosses() {
+        // A 4 × 3 grid: P-1 left of Ω = 1.5, P-2 right of it, one aperiodic cell; the curve
+        // runs up Ω = 1.5 between V = 0 and 1.5 (so the top row's pair is not crossed).
+        let mut cells = Vec::new();
+        for j in 0..3 {
+            for i in 0..4 {
+                let p = if (i, j) == (3, 0) {
+                    None
+                } else if i < 2 {
+                    Some(1)
+                } else {
+                    Some(2)
+                };
+                cells.push((f64::from(i), f64::from(j), p));
+            }
+        }
+        let line = |kind, period| Line {
+            kind,
+            period,
+            points: vec![(1.5, 0.0), (1.5, 1.5)],
+        };
+        let c = separation(&cells, &[line(Kind::PeriodDoubling, 1)]);
+        assert_eq!((c.pairs, c.crossed), (3, 2), "{c:?}");
+        assert_eq!((c.pairs_in_span, c.crossed_in_span), (2, 2), "{c:?}");
+        // A fold, or the doubling of P-2 orbits, is no P-1 → P-2 boundary.
+        for l in [line(Kind::Fold, 1), line(Kind::PeriodDoubling, 2)] {
+            let c = separation(&cells, &[l]);
+            assert_eq!((c.pairs, c.crossed), (3, 0), "{c:?}");
+        }
+    }
 }
