@@ -7,9 +7,9 @@ use clap::Args;
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch, Kind};
+use bistable_analysis::bifurcations::{locate, Branch, Kind};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
-use bistable_analysis::twoparam::{continue_point, covers, CurveOptions, CurvePoint};
+use bistable_analysis::twoparam::{trace_all, CurveOptions, CurvePoint};
 
 use crate::classify::{Record, RecordCsv, CSV_COLUMNS};
 use crate::common::{lanes, threads, ModelArgs};
@@ -18,9 +18,6 @@ use crate::output::{print_json, print_text, CsvFile, Field};
 use crate::plot::{self, Chart, DrawResult, Mark, FONT};
 use crate::progress::StageBars;
 use crate::ranges::{Pair, Range};
-
-/// A located point this close (Euclidean in x, x', Ω, V) to a curve already traced is on it.
-const ON_CURVE: f64 = 1e-4;
 
 /// The columns of the curve CSV (`--out`, read back by `--curves`).
 const COLUMNS: &str = "curve,kind,period,omega,velocity,x0,v0,multiplier_1_re,multiplier_1_im,\
@@ -269,10 +266,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
         Curves::Natural(b) => Branch::from_natural(&models, b),
         Curves::Arclength(t) => Branch::from_traces(&models[0], p, t),
     };
-    let starts: Vec<BifurcationPoint> = locate(&on, threads, &mut |r| bars.report(r))?
-        .into_iter()
-        .filter(|b| matches!(b.kind, Kind::Fold | Kind::PeriodDoubling))
-        .collect();
+    let starts = locate(&on, threads, &mut |r| bars.report(r))?;
     let (lo, hi) = range.bounds();
     let o = CurveOptions {
         omega_bounds: (lo, hi),
@@ -280,24 +274,12 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
         ds_max: args.ds,
         max_points: args.max_points,
     };
-    let mut all: Vec<(BifurcationPoint, Vec<CurvePoint>)> = Vec::new();
-    for s in starts {
-        // A curve that turns in V meets --velocity again: its second point is on it.
-        if all
-            .iter()
-            .any(|(t, c)| t.kind == s.kind && t.period == s.period && covers(c, &s, ON_CURVE))
-        {
-            continue;
-        }
-        let c = continue_point(&models[0], &s, o).map_err(|e| {
-            CliError::Failed(format!(
-                "cannot continue the {} at Ω = {}: {e}",
-                s.kind.name(),
-                s.omega
-            ))
-        })?;
-        all.push((s, c));
-    }
+    let all = trace_all(&models[0], starts, o).map_err(|(kind, omega, e)| {
+        CliError::Failed(format!(
+            "cannot continue the {} at Ω = {omega}: {e}",
+            kind.name()
+        ))
+    })?;
     let mut files = Vec::new();
     if let Some(path) = &args.out {
         let mut csv = CsvFile::create(path, COLUMNS)?;
