@@ -478,6 +478,10 @@ pub(crate) fn atlas<'py>(
             "must be at least one finite value > 0",
         ));
     }
+    let models = omega
+        .iter()
+        .map(|&w| model(py, w, velocity, zeta, restitution, tol, chatter))
+        .collect::<PyResult<Vec<_>>>()?;
     let (v_lo, v_hi) = velocity_bounds;
     if !(v_lo >= 0.0 && v_lo < velocity && velocity < v_hi) {
         return Err(invalid_text(
@@ -494,10 +498,6 @@ pub(crate) fn atlas<'py>(
     }
     let threads = threads_arg(threads)?;
     let width = lanes_arg(lanes)?;
-    let models = omega
-        .iter()
-        .map(|&w| model(py, w, velocity, zeta, restitution, tol, chatter))
-        .collect::<PyResult<Vec<_>>>()?;
     let lo = omega.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = omega.iter().copied().fold(f64::NEG_INFINITY, f64::max);
     let o = CurveOptions {
