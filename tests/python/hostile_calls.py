@@ -93,6 +93,11 @@ GROUPS = {
             bi.continue_omega,
             dict(omega=[2.2, 2.25], velocity=0.07, settle=5, threads=1),
         ),
+        "atlas": (
+            bi.atlas,
+            dict(omega=[2.2, 2.25], velocity=0.07, velocity_bounds=(0.06, 0.08), settle=5,
+                 threads=1),
+        ),  # fmt: skip
         "bifurcation": (
             bi.bifurcation,
             dict(param="omega", values=[2.2], velocity=0.07, transient=2, record=2,
@@ -158,6 +163,8 @@ COMBINED = {
     # the starts x0 (from 0) must not be below the plate at the phase
     ("sweep.basins", "phase"): "x0",
     ("sweep.basin_uncertainty", "phase"): "x0",
+    # velocity must lie inside velocity_bounds
+    ("atlas", "velocity"): "velocity_bounds",
 }
 
 

@@ -1,4 +1,4 @@
-"""orbit, continue_omega, bifurcation, energy_map and spectrum against the CLI run with the same
+"""orbit, continue_omega, atlas, bifurcation, energy_map and spectrum against the CLI run with the same
 arguments (its JSON and CSV files), and against analytic identities (det M of the monodromy
 matrix, the energy ratio of Eq. 13, the impacts of `simulate`)."""
 
@@ -166,6 +166,32 @@ def test_continue_omega_bifurcations_equal_cli(cli, tmp_path):
     assert len(ref["bifurcations"]) == 1 and close(ref["bifurcations"][0]["omega"], df["omega"][0])
     assert_frames_equal(df, tmp_path / "p2_bifurcations.csv",
                         bool_cols=("sticks_before", "sticks_after"))
+
+
+def test_atlas_equals_cli(cli, tmp_path):
+    # The fold of the P-1 resonance and the high-energy branch's doubling from V = 0.05
+    # (docs/bifurcations.md): both kinds, by arclength continuation.
+    csv = tmp_path / "fold.csv"
+    ref = cli_json(cli, "atlas", "--continue-omega", "1.2:1.6:41", "--velocity", 0.05,
+                   "--arclength", "--velocity-bounds", "0.03,0.07", "--out", csv,
+                   "--threads", 2)
+    df = bi.atlas(bi.linspace(1.2, 1.6, 41), 0.05, (0.03, 0.07), method="arclength", threads=2)
+    assert list(df.columns) == list(bi.analyses.ATLAS_COLUMNS)
+    assert sorted(set(df["kind"])) == ["fold", "period_doubling"]
+    assert [c["points"] for c in ref["curves"]] == list(df.groupby("curve").size())
+    assert_frames_equal(df, csv)
+
+
+def test_atlas_errors():
+    w = bi.linspace(2.05, 2.25, 5)
+    with pytest.raises(ValueError, match="for 'velocity_bounds'"):
+        bi.atlas(w, 0.07, (0.08, 0.09))
+    with pytest.raises(ValueError, match="for 'ds'"):
+        bi.atlas(w, 0.07, (0.06, 0.08), ds=0.0)
+    with pytest.raises(ValueError, match="for 'method'"):
+        bi.atlas(w, 0.07, (0.06, 0.08), method="secant")
+    with pytest.raises(ValueError, match="for 'omega'"):
+        bi.atlas([2.0, -1.0], 0.07, (0.06, 0.08))
 
 
 def test_continue_omega_errors():

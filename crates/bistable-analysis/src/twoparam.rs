@@ -266,6 +266,41 @@ pub fn continue_point(
     Ok(out)
 }
 
+/// A located point this close (Euclidean in `(x, x', Ω, V)`) to a curve already traced is on
+/// it (see [`trace_all`]).
+pub const ON_CURVE: f64 = 1e-4;
+
+/// Curves of an atlas, each with the point it was started from.
+pub type Atlas = Vec<(BifurcationPoint, Vec<CurvePoint>)>;
+
+/// The atlas of `points` (located on branches at one V, e.g. by
+/// [`crate::bifurcations::locate`]): every fold and period doubling among them, in their order,
+/// with its curve continued by [`continue_point`] (`model`: any model of the run's ζ and e).
+/// A point on a curve already traced of its kind and period (within [`ON_CURVE`]: a curve that
+/// turns in V meets the branches' V twice) starts no second curve; the other kinds are left
+/// out. The error gives the kind and Ω of the point whose curve could not start.
+pub fn trace_all(
+    model: &Model,
+    points: Vec<BifurcationPoint>,
+    o: CurveOptions,
+) -> Result<Atlas, (Kind, f64, CurveError)> {
+    let mut all: Vec<(BifurcationPoint, Vec<CurvePoint>)> = Vec::new();
+    for s in points {
+        if !matches!(s.kind, Kind::Fold | Kind::PeriodDoubling)
+            || all
+                .iter()
+                .any(|(t, c)| t.kind == s.kind && t.period == s.period && covers(c, &s, ON_CURVE))
+        {
+            continue;
+        }
+        match continue_point(model, &s, o) {
+            Ok(c) => all.push((s, c)),
+            Err(e) => return Err((s.kind, s.omega, e)),
+        }
+    }
+    Ok(all)
+}
+
 /// Whether the bifurcation point `p` lies on `curve` (within `tol` of one of its segments,
 /// Euclidean in `(x, x', Ω, V)`), with the same kind and period as `curve` was traced for:
 /// a second start on a curve already traced (one that turns in V meets V again).

@@ -10,7 +10,6 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use bistable_analysis::sweep::classify_points_with;
-use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
 use bistable_analysis::Model;
 use bistable_core::ClassifyOptions;
 
@@ -19,7 +18,7 @@ use crate::common::ModelArgs;
 use crate::error::CliError;
 use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary};
 use crate::output::{print_json, print_text};
-use crate::plot::{self, halo_segments, header, Area, DrawResult, Mark, FONT};
+use crate::plot::{self, header, Area, DrawResult, Mark, FONT};
 use crate::ranges::Range;
 
 /// Lyapunov periods of an aperiodic point in a map unless `--lyapunov-periods` says otherwise.
@@ -357,10 +356,6 @@ fn category(r: &Record) -> Category {
     }
 }
 
-const LINE_SINGLE: RGBColor = RGBColor(255, 255, 255);
-const LINE_INTERWELL: RGBColor = RGBColor(0, 225, 255);
-const LINE_QUASI: RGBColor = RGBColor(255, 230, 0);
-
 fn draw(
     path: &Path,
     model: &Model,
@@ -370,50 +365,55 @@ fn draw(
     failed: &[(f64, f64)],
     co: ClassifyOptions,
 ) -> Result<(), CliError> {
-    plot::png(path, (1600, 1000), |root| {
-        draw_map(root, model, omegas, vs, records, failed, co)
+    let subtitle = format!(
+        "{} × {} points ({} classified), from rest at x = 0, up to {} natural periods; \
+         thresholds of Eq. 16–18",
+        omegas.n,
+        vs.n,
+        records.len(),
+        co.max_natural_periods
+    );
+    plot::png(path, MAP_SIZE, |root| {
+        draw_map(
+            root,
+            (
+                &format!(
+                    "Response classes — ζ = {}, e = {}",
+                    model.params.zeta(),
+                    model.restitution()
+                ),
+                &subtitle,
+            ),
+            model.restitution(),
+            (omegas, vs),
+            (records, failed),
+            (&[], |_| Ok(())),
+        )
     })
 }
 
-fn draw_map(
+/// Pixels of a map figure.
+pub(crate) const MAP_SIZE: (u32, u32) = (1600, 1000);
+
+/// A map figure in `root`: `(title, subtitle)`, the cells of `records` (and `failed` points)
+/// on the grid `omegas × vs` in the class colours with the colour key beside them, the
+/// thresholds of Eq. 16–18 for restitution `e`, and an `overlay`: its legend entries (after
+/// the thresholds') and what it draws on the chart over the cells and thresholds.
+pub(crate) fn draw_map(
     root: &Area<'_>,
-    model: &Model,
-    omegas: Range,
-    vs: Range,
-    records: &[&Record],
-    failed: &[(f64, f64)],
-    co: ClassifyOptions,
+    (title, subtitle): (&str, &str),
+    e: f64,
+    (omegas, vs): (Range, Range),
+    (records, failed): (&[&Record], &[(f64, f64)]),
+    (extra, overlay): (
+        &[(Mark, String)],
+        impl FnOnce(&mut plot::Chart<'_, '_>) -> DrawResult,
+    ),
 ) -> DrawResult {
-    let e = model.restitution();
-    let (v_single, v_inter) = (single_impact(e), interwell(e));
-    let legend = [
-        (
-            Mark::Halo(LINE_SINGLE, None),
-            format!("single impact V = 1/(4(1+e)) = {v_single:.4}"),
-        ),
-        (
-            Mark::Halo(LINE_INTERWELL, Some((10, 6))),
-            format!("interwell V = (1−e)/(2(1+e)) = {v_inter:.4}"),
-        ),
-        (
-            Mark::Halo(LINE_QUASI, Some((3, 4))),
-            "quasi-static V = Ω/2".to_string(),
-        ),
-    ];
+    let mut legend = plot::threshold_legend(e);
+    legend.extend_from_slice(extra);
     let total = omegas.n * vs.n;
-    let area = header(
-        root,
-        &format!("Response classes — ζ = {}, e = {e}", model.params.zeta()),
-        &format!(
-            "{} × {} points ({} classified), from rest at x = 0, up to {} natural periods; \
-             thresholds of Eq. 16–18",
-            omegas.n,
-            vs.n,
-            records.len(),
-            co.max_natural_periods
-        ),
-        &legend,
-    )?;
+    let area = header(root, title, subtitle, &legend)?;
     plot::grid_figure(
         &area,
         330,
@@ -422,7 +422,7 @@ fn draw_map(
             "shaker frequency ratio Ω (units of ω0)",
             "shaker velocity amplitude V (units of ω0·Δx)",
         ),
-        |chart, right, [(wx, hw), (vy, hv)]| {
+        |chart, right, [(_, hw), (_, hv)]| {
             let mut present: HashMap<Category, usize> = HashMap::new();
             let cells = records
                 .iter()
@@ -446,42 +446,8 @@ fn draw_map(
                     SENSITIVE.stroke_width(2),
                 )
             }))?;
-            // Thresholds, clipped to the chart.
-            let to_px = |p: (f64, f64)| chart.backend_coord(&p);
-            let (x0, x1) = wx;
-            let (y0, y1) = vy;
-            let mut labels = Vec::new();
-            for (v, colour, dash, name) in [
-                (v_single, LINE_SINGLE, None, "single impact"),
-                (v_inter, LINE_INTERWELL, Some((10, 6)), "interwell"),
-            ] {
-                if v > y0 && v < y1 {
-                    halo_segments(root, &[to_px((x0, v)), to_px((x1, v))], colour, dash)?;
-                    labels.push((to_px((x1, v)), name));
-                }
-            }
-            // V = Ω/2 from where it enters the chart to where it leaves.
-            let a = x0.max(2.0 * y0);
-            let b = x1.min(2.0 * y1);
-            if b > a {
-                halo_segments(
-                    root,
-                    &[to_px((a, quasi_static(a))), to_px((b, quasi_static(b)))],
-                    LINE_QUASI,
-                    Some((3, 4)),
-                )?;
-            }
-            for ((px, py), name) in labels {
-                let style = plot::left((FONT, 16).into_font().color(&BLACK));
-                let text = format!("{name} ");
-                let (tw, _) = root.estimate_text_size(&text, &style)?;
-                let x = px - tw as i32 - 8;
-                root.draw(&Rectangle::new(
-                    [(x - 4, py - 22), (x + tw as i32 + 2, py - 4)],
-                    WHITE.mix(0.85).filled(),
-                ))?;
-                root.draw(&Text::new(text, (x, py - 13), style))?;
-            }
+            plot::draw_thresholds(root, chart, e)?;
+            overlay(chart)?;
             legend_panel(
                 right,
                 &present,

@@ -1188,3 +1188,73 @@ fn atlas_continues_the_fig6_period_doubling_in_omega_and_v() {
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--velocity-bounds"), "{}", stderr(&o));
 }
+
+#[test]
+fn atlas_plot_over_a_map_and_the_p1_p2_check() {
+    let dir = scratch("atlas-map");
+    let (map, curves, png) = (
+        dir.join("map.csv"),
+        dir.join("pd.csv"),
+        dir.join("atlas.png"),
+    );
+    // 3 × 3 cells around the P-1 → P-2 doubling at (Ω, V) = (2.1243, 0.07): P-1 below and
+    // left of the curve, P-2 above and right of it.
+    json(&[
+        "map",
+        "--omega-range",
+        "2.10:2.15:3",
+        "--velocity-range",
+        "0.065:0.075:3",
+        "--out",
+        s(&map),
+        "--json",
+    ]);
+    fn atlas<'a>(extra: &[&'a str]) -> Vec<&'a str> {
+        let mut a = vec![
+            "atlas",
+            "--continue-omega",
+            "2.05:2.25:41",
+            "--velocity",
+            "0.07",
+            "--velocity-bounds",
+            "0.065,0.075",
+        ];
+        a.extend_from_slice(extra);
+        a
+    }
+    let c = json(&atlas(&[
+        "--out",
+        s(&curves),
+        "--map",
+        s(&map),
+        "--plot",
+        s(&png),
+        "--json",
+    ]));
+    assert_png(&png);
+    let m = &c["map_check"];
+    assert_eq!(m["pairs"], 4, "{c}");
+    assert_eq!(m["crossed"], 4, "{c}");
+    assert_eq!(m["fraction_in_span"], 1.0, "{c}");
+    // The curves of an earlier run drawn again without a map.
+    let c = json(&atlas(&[
+        "--curves",
+        s(&curves),
+        "--plot",
+        s(&png),
+        "--json",
+    ]));
+    assert!(c.get("map_check").is_none(), "{c}");
+    assert_png(&png);
+    // Files of the wrong kind, or a map of another e, are refused with exit code 2.
+    for (args, what) in [
+        (vec!["--map", s(&curves)], "not a map file"),
+        (vec!["--curves", s(&map)], "not an atlas file"),
+        (vec!["--map", s(&map), "--restitution", "0.7"], "e = 0.7"),
+        (vec!["--map", s(&dir.join("none.csv"))], "cannot be read"),
+    ] {
+        let o = bistable(&atlas(&args));
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(what), "{args:?}: {}", stderr(&o));
+    }
+}

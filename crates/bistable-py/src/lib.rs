@@ -9,7 +9,7 @@
 //!
 //! One module per area of the API, each registered in `_native` below: `simulate`
 //! (`simulate`, `Simulator`), `classify` (`classify`, the point lists of `sweep.map`,
-//! `thresholds`), `orbit` (`orbit`, `continue_omega`), `bifurcation`, `energy` (`energy_map`),
+//! `thresholds`), `orbit` (`orbit`, `continue_omega`, `atlas`), `bifurcation`, `energy` (`energy_map`),
 //! `spectrum`, `basins` (the cells and attractors of `sweep.basins`); `common` holds the argument
 //! checks, the model, the tables and the Ctrl-C check shared by them. A new area is a new module
 //! with its `#[pyfunction]`s, one `add_function` line here and its wrapper in
@@ -53,6 +53,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(classify::outcomes_from_text, m)?)?;
     m.add_function(wrap_pyfunction!(orbit::orbit, m)?)?;
     m.add_function(wrap_pyfunction!(orbit::continue_omega, m)?)?;
+    m.add_function(wrap_pyfunction!(orbit::atlas, m)?)?;
     m.add_function(wrap_pyfunction!(bifurcation::bifurcation, m)?)?;
     m.add_function(wrap_pyfunction!(energy::energy_map, m)?)?;
     m.add_function(wrap_pyfunction!(spectrum::spectrum, m)?)?;

@@ -1,5 +1,6 @@
-//! `orbit` (one periodic orbit by shooting) and `continue_omega` (branches of orbits continued
-//! in Ω), as `bistable orbit` without and with `--continue-omega`.
+//! `orbit` (one periodic orbit by shooting), `continue_omega` (branches of orbits continued
+//! in Ω) and `atlas` (their folds and period doublings continued in (Ω, V)), as `bistable
+//! orbit` without and with `--continue-omega` and `bistable atlas`.
 
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
@@ -10,6 +11,7 @@ use bistable_analysis::branches::Branches;
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::cycles::settled;
 use bistable_analysis::orbit::{shoot, summarise};
+use bistable_analysis::twoparam::{trace_all, Atlas, CurveOptions};
 use bistable_analysis::Model;
 
 use crate::common::{
@@ -389,4 +391,141 @@ pub(crate) fn continue_omega<'py>(
         }
     }
     Ok(out)
+}
+
+/// The curves of an atlas, one row per point: the columns of `bistable atlas --out`, with
+/// `kind` as its index in `Kind::ALL` (the Python side names it).
+fn atlas_rows(all: &Atlas) -> Vec<(&'static str, &'static str, Col)> {
+    let mut c: [Col; 12] = Default::default();
+    for (k, (s, curve)) in all.iter().enumerate() {
+        let kind = Kind::ALL.iter().position(|&q| q == s.kind).unwrap_or(0);
+        for q in curve {
+            let m = q.multipliers;
+            c[0].i(k as i64);
+            c[1].i(kind as i64);
+            c[2].i(i64::from(s.period));
+            c[3].f(q.omega);
+            c[4].f(q.velocity);
+            c[5].f(q.x0);
+            c[6].f(q.v0);
+            c[7].f(m[0].0);
+            c[8].f(m[0].1);
+            c[9].f(m[1].0);
+            c[10].f(m[1].1);
+            c[11].i(q.impacts as i64);
+        }
+    }
+    let names = [
+        ("curve", "i8"),
+        ("kind", "i8"),
+        ("period", "i8"),
+        ("omega", "f8"),
+        ("velocity", "f8"),
+        ("x0", "f8"),
+        ("v0", "f8"),
+        ("multiplier_1_re", "f8"),
+        ("multiplier_1_im", "f8"),
+        ("multiplier_2_re", "f8"),
+        ("multiplier_2_im", "f8"),
+        ("impacts", "i8"),
+    ];
+    names
+        .into_iter()
+        .zip(c)
+        .map(|((n, t), c)| (n, t, c))
+        .collect()
+}
+
+/// Fold and period-doubling curves in (Ω, V) (see `bistable_impact.atlas`).
+#[pyfunction]
+#[pyo3(signature = (omega, velocity, velocity_bounds, period=1, method="natural", ds=0.005,
+    max_points=200, settle=2000, threads=0, lanes=4, zeta=0.02, restitution=0.85, tol=1e-16,
+    chatter="accumulation"))]
+#[allow(clippy::too_many_arguments)]
+pub(crate) fn atlas<'py>(
+    py: Python<'py>,
+    omega: Vec<f64>,
+    velocity: f64,
+    velocity_bounds: (f64, f64),
+    period: u32,
+    method: &str,
+    ds: f64,
+    max_points: usize,
+    settle: u32,
+    threads: usize,
+    lanes: usize,
+    zeta: f64,
+    restitution: f64,
+    tol: f64,
+    chatter: &str,
+) -> PyResult<Bound<'py, PyList>> {
+    let period = check_period("period", period)?;
+    let method = match method {
+        "natural" => Method::Natural,
+        "arclength" => Method::Arclength,
+        other => {
+            return Err(invalid_text(
+                "method",
+                other,
+                "must be 'natural' or 'arclength'",
+            ))
+        }
+    };
+    if omega.is_empty() || omega.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
+        return Err(invalid_text(
+            "omega",
+            format!("{omega:?}"),
+            "must be at least one finite value > 0",
+        ));
+    }
+    let models = omega
+        .iter()
+        .map(|&w| model(py, w, velocity, zeta, restitution, tol, chatter))
+        .collect::<PyResult<Vec<_>>>()?;
+    let (v_lo, v_hi) = velocity_bounds;
+    if !(v_lo >= 0.0 && v_lo < velocity && velocity < v_hi) {
+        return Err(invalid_text(
+            "velocity_bounds",
+            format!("({v_lo}, {v_hi})"),
+            "must satisfy 0 <= lo < velocity < hi",
+        ));
+    }
+    if !(ds.is_finite() && ds > 0.0) {
+        return Err(invalid_text("ds", ds, "must be finite and > 0"));
+    }
+    if max_points < 1 {
+        return Err(invalid_text("max_points", max_points, "must be >= 1"));
+    }
+    let threads = threads_arg(threads)?;
+    let width = lanes_arg(lanes)?;
+    let lo = omega.iter().copied().fold(f64::INFINITY, f64::min);
+    let hi = omega.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+    let o = CurveOptions {
+        omega_bounds: (lo, hi),
+        velocity_bounds,
+        ds_max: ds,
+        max_points,
+    };
+    let all = released(
+        py,
+        || {
+            let c = continue_orbits(&models, period, settle, method, threads, width, &mut |_| {
+                check_signals()
+            })?;
+            let on = match &c {
+                Curves::Natural(b) => Branch::from_natural(&models, b),
+                Curves::Arclength(t) => Branch::from_traces(&models[0], period, t),
+            };
+            let found = locate(&on, threads, &mut |_| check_signals())?;
+            Ok(trace_all(&models[0], found, o))
+        },
+        |e: Stop| e.into_py(py),
+    )?
+    .map_err(|(kind, omega, e)| {
+        pyo3::exceptions::PyRuntimeError::new_err(format!(
+            "cannot continue the {} at Ω = {omega}: {e}",
+            kind.name()
+        ))
+    })?;
+    table(py, atlas_rows(&all))
 }

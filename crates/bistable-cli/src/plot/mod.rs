@@ -15,6 +15,7 @@ use plotters::prelude::*;
 use plotters::style::text_anchor::{HPos, Pos, VPos};
 use plotters::style::FontStyle;
 
+use bistable_analysis::thresholds::{interwell, quasi_static, single_impact};
 use bistable_analysis::Model;
 
 use crate::error::CliError;
@@ -560,6 +561,73 @@ pub(crate) fn vline(chart: &mut Chart<'_, '_>, x: f64, color: RGBColor) -> DrawR
         6,
         color.stroke_width(1),
     ))?;
+    Ok(())
+}
+
+// ---------------------------------------------------------------------------------------------
+// The thresholds of Eq. 16–18 over an (Ω, V) chart (`map`, `atlas`).
+
+const LINE_SINGLE: RGBColor = RGBColor(255, 255, 255);
+const LINE_INTERWELL: RGBColor = RGBColor(0, 225, 255);
+const LINE_QUASI: RGBColor = RGBColor(255, 230, 0);
+
+/// The legend entries of the thresholds of Eq. 16–18 for restitution `e` (as
+/// [`draw_thresholds`] draws them).
+pub(crate) fn threshold_legend(e: f64) -> Vec<(Mark, String)> {
+    vec![
+        (
+            Mark::Halo(LINE_SINGLE, None),
+            format!("single impact V = 1/(4(1+e)) = {:.4}", single_impact(e)),
+        ),
+        (
+            Mark::Halo(LINE_INTERWELL, Some((10, 6))),
+            format!("interwell V = (1−e)/(2(1+e)) = {:.4}", interwell(e)),
+        ),
+        (
+            Mark::Halo(LINE_QUASI, Some((3, 4))),
+            "quasi-static V = Ω/2".to_string(),
+        ),
+    ]
+}
+
+/// The thresholds of Eq. 16–18 for restitution `e` on an (Ω, V) `chart` drawn in `root`:
+/// haloed lines clipped to the chart, the horizontal ones named at their right end.
+pub(crate) fn draw_thresholds(root: &Area<'_>, chart: &Chart<'_, '_>, e: f64) -> DrawResult {
+    let to_px = |p: (f64, f64)| chart.backend_coord(&p);
+    let (xr, yr) = (chart.x_range(), chart.y_range());
+    let (x0, x1, y0, y1) = (xr.start, xr.end, yr.start, yr.end);
+    let mut labels = Vec::new();
+    for (v, colour, dash, name) in [
+        (single_impact(e), LINE_SINGLE, None, "single impact"),
+        (interwell(e), LINE_INTERWELL, Some((10, 6)), "interwell"),
+    ] {
+        if v > y0 && v < y1 {
+            halo_segments(root, &[to_px((x0, v)), to_px((x1, v))], colour, dash)?;
+            labels.push((to_px((x1, v)), name));
+        }
+    }
+    // V = Ω/2 from where it enters the chart to where it leaves.
+    let a = x0.max(2.0 * y0);
+    let b = x1.min(2.0 * y1);
+    if b > a {
+        halo_segments(
+            root,
+            &[to_px((a, quasi_static(a))), to_px((b, quasi_static(b)))],
+            LINE_QUASI,
+            Some((3, 4)),
+        )?;
+    }
+    for ((px, py), name) in labels {
+        let style = left((FONT, 16).into_font().color(&BLACK));
+        let text = format!("{name} ");
+        let (tw, _) = root.estimate_text_size(&text, &style)?;
+        let x = px - tw as i32 - 8;
+        root.draw(&Rectangle::new(
+            [(x - 4, py - 22), (x + tw as i32 + 2, py - 4)],
+            WHITE.mix(0.85).filled(),
+        ))?;
+        root.draw(&Text::new(text, (x, py - 13), style))?;
+    }
     Ok(())
 }
 

@@ -10,7 +10,7 @@ distance ``Δx`` (wells at 0 and 1, barrier at 1/2), velocities in ``ω0·Δx``,
 What it offers mirrors the ``bistable`` CLI: :func:`simulate` and :class:`Simulator`;
 :func:`classify`, :func:`thresholds` and :func:`sweep.map <bistable_impact.sweep.map>` (local
 threads or a ``dask.distributed`` client); :func:`orbit`, :func:`continue_omega`,
-:func:`bifurcation`, :func:`energy_map` and :func:`spectrum` (module ``analyses``), which
+:func:`atlas`, :func:`bifurcation`, :func:`energy_map` and :func:`spectrum` (module ``analyses``), which
 return the subcommands' JSON keys as dicts and their CSV files as pandas DataFrames;
 :func:`linspace` gives the values of the CLI's ``A:B:N`` ranges.
 
@@ -34,7 +34,7 @@ from . import _check as check
 from . import _native
 from ._native import Simulator
 from ._table import Table
-from .analyses import bifurcation, continue_omega, energy_map, orbit, spectrum
+from .analyses import atlas, bifurcation, continue_omega, energy_map, orbit, spectrum
 
 __all__ = [
     "simulate",
@@ -42,6 +42,7 @@ __all__ = [
     "thresholds",
     "orbit",
     "continue_omega",
+    "atlas",
     "bifurcation",
     "energy_map",
     "spectrum",

@@ -111,6 +111,23 @@ def continue_omega(
     tol: float = 1e-16,
     chatter: str = "accumulation",
 ) -> Dict[str, Any]: ...
+# atlas's table has "kind" coded as continue_omega's "bifurcations" table.
+def atlas(
+    omega: List[float],
+    velocity: float,
+    velocity_bounds: Tuple[float, float],
+    period: int = 1,
+    method: str = "natural",
+    ds: float = 0.005,
+    max_points: int = 200,
+    settle: int = 2000,
+    threads: int = 0,
+    lanes: int = 4,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+) -> List[Column]: ...
 def bifurcation(
     param: str,
     values: List[float],

@@ -1,6 +1,6 @@
 """The paper's analyses beyond classification, mirroring the CLI subcommands: ``orbit`` and
-``continue_omega`` (``bistable orbit``, with and without ``--continue-omega``), ``bifurcation``,
-``energy_map`` and ``spectrum``.
+``continue_omega`` (``bistable orbit``, with and without ``--continue-omega``), ``atlas``,
+``bifurcation``, ``energy_map`` and ``spectrum``.
 
 Each returns a dict with the keys of the subcommand's ``--json`` output; what the subcommand
 writes as CSV comes as a pandas DataFrame with the CSV's columns (flags as ``bool``), grids as
@@ -17,7 +17,7 @@ from . import _check as check
 from . import _native
 from ._table import Table
 
-__all__ = ["orbit", "continue_omega", "bifurcation", "energy_map", "spectrum"]
+__all__ = ["orbit", "continue_omega", "atlas", "bifurcation", "energy_map", "spectrum"]
 
 #: Columns of the orbits DataFrames (the CLI's ``_orbits.csv``).
 ORBIT_COLUMNS = (
@@ -37,6 +37,12 @@ BIFURCATION_COLUMNS = (
     "kind", "omega", "velocity", "period", "x0", "v0", "max_x", "multiplier_1_re",
     "multiplier_1_im", "multiplier_2_re", "multiplier_2_im", "omega_error", "branch", "index",
     "impacts_before", "impacts_after", "sticks_before", "sticks_after",
+)  # fmt: skip
+
+#: Columns of :func:`atlas`'s DataFrame (the CSV of ``bistable atlas --out``).
+ATLAS_COLUMNS = (
+    "curve", "kind", "period", "omega", "velocity", "x0", "v0", "multiplier_1_re",
+    "multiplier_1_im", "multiplier_2_re", "multiplier_2_im", "impacts",
 )  # fmt: skip
 
 #: ``kind`` of the bifurcation points, by the code the native module uses.
@@ -183,6 +189,71 @@ def continue_omega(
     d["orbits"] = _orbits_frame(d)
     d["bifurcations"] = _bifurcations_frame(d)
     return d
+
+
+def atlas(
+    omega: Sequence[float],
+    velocity: float,
+    velocity_bounds: Tuple[float, float],
+    period: int = 1,
+    method: str = "natural",
+    ds: float = 0.005,
+    max_points: int = 200,
+    settle: int = 2000,
+    threads: int = 0,
+    lanes: int = 4,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+):
+    """Fold and period-doubling curves in ``(Ω, V)``, as ``bistable atlas --out``: the
+    ``period``-periodic orbits are continued over ``omega`` at ``velocity`` (as
+    :func:`continue_omega`), the bifurcation points on them located, and every fold
+    (``det(M − I) = 0``) and period doubling (``det(M + I) = 0``) continued in ``(Ω, V)`` by
+    pseudo-arclength continuation of the shooting system extended by that condition. A curve
+    ends where ``Ω`` leaves the range of ``omega``, ``V`` leaves ``velocity_bounds``, the
+    impacts per period change, the step collapses, or after ``max_points`` points each way; a
+    point already on a traced curve starts no second one.
+
+    Returns a DataFrame with the columns of the CLI's CSV (:data:`ATLAS_COLUMNS`), one row per
+    curve point: ``curve`` (its number), ``kind`` (``'fold'`` or ``'period_doubling'``),
+    ``period``, ``omega``, ``velocity``, the fixed point ``x0, v0`` at plate phase 0, the
+    multipliers (one at +1 or −1) and ``impacts`` per orbit; each curve from its low-``V`` end.
+
+    Args:
+        omega: the grid of ``Ω`` (> 0) the branches are continued over.
+        velocity: ``V`` of the branches (>= 0).
+        velocity_bounds: ``(lo, hi)`` with ``0 <= lo < velocity < hi``.
+        period: ``[1, 64]`` shaker periods.
+        method: ``'natural'`` or ``'arclength'`` (through folds; needed for folds).
+        ds: largest step along a curve (> 0), Euclidean in ``(x, x', Ω, V)``.
+        max_points: most points of a curve each way from its start (>= 1).
+        settle, threads, lanes, zeta, restitution, tol, chatter: as for
+            :func:`continue_omega`.
+
+    Raises:
+        ValueError: a bad argument (named). RuntimeError: a simulation failed or a curve could
+        not start.
+    """
+    ws = check.reals("omega", omega)
+    m = check.model(velocity=velocity, zeta=zeta, restitution=restitution, tol=tol)
+    rows = _native.atlas(
+        ws,
+        velocity_bounds=check.pair("velocity_bounds", velocity_bounds),
+        period=check.integer("period", period, 1, 64),
+        method=check.text("method", method),
+        ds=check.real("ds", ds),
+        max_points=check.integer("max_points", max_points, 1, 1_000_000),
+        settle=check.integer("settle", settle, 0, check.MAX_TRANSIENT),
+        threads=check.threads(threads),
+        lanes=check.lanes(lanes),
+        chatter=check.text("chatter", chatter),
+        **m,
+    )
+    df = Table(rows).to_pandas()
+    df["kind"] = _BIFURCATION_KINDS[df["kind"].to_numpy()]
+    return df
 
 
 #: ``kind`` values of the bifurcation data, by the code the native module uses.
