@@ -275,7 +275,11 @@ impl Model {
             // Only its start matters: every step replaces it with a piece over the step.
             ShakerMode::External => {
                 let inputs = plate_inputs(values, derivatives);
-                plate_piece(&scale, origin, tau0 + 1.0, &inputs, None)?.into()
+                moderate(
+                    plate_piece(&scale, origin, tau0 + 1.0, &inputs, None)?,
+                    &scale,
+                )?
+                .into()
             }
         };
         let mut sim =
@@ -1282,6 +1286,22 @@ pub(crate) fn plate_piece(
     })
 }
 
+/// `piece` if its position, velocity and acceleration stay below what makes an output overflow
+/// (`fly_limit`). The plate at the start time must: its outputs are read in initialization
+/// mode, before any step could fail on them (a step's plate is checked by the step itself,
+/// which ends with `fmi2Discard` where the state stops being finite).
+fn moderate(piece: PolyPiece, scale: &Scale) -> Result<PolyPiece, String> {
+    let limit = fly_limit(scale);
+    if piece.bounds().iter().all(|&b| b <= limit) {
+        return Ok(piece);
+    }
+    Err(format!(
+        "the plate polynomial from the inputs at t = {} s is too large (its position, velocity or acceleration could exceed {} in units of delta_x and omega0); inputs z_in, zdot_in and their derivatives must be moderate",
+        scale.time(piece.start().to_f64()),
+        Num(limit)
+    ))
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -1418,6 +1438,36 @@ mod tests {
         let first = plate_piece(&scale, start, 1.5, &inputs, None).unwrap();
         assert!((PlateMotion::from(first).motion(start).0 - 0.2).abs() < 1e-15);
         assert!(plate_piece(&scale, start, 0.5, &inputs, None).is_err());
+    }
+
+    #[test]
+    fn a_start_plate_that_would_overflow_the_outputs_is_refused() {
+        let scale = Scale {
+            omega0: 1.0,
+            dx: 0.5,
+            mass: 1.0,
+        };
+        let start = Instant::new(0.0);
+        // A finite acceleration input of 1e300 m/s² (the fuzzer's): z'' = 2e300 in units of Δx.
+        let huge = [Some(0.0), Some(0.0), Some(1e300), None, None, None];
+        let e = moderate(
+            plate_piece(&scale, start, 1.0, &huge, None).unwrap(),
+            &scale,
+        );
+        assert!(e.unwrap_err().contains("too large"));
+        // Moderate inputs pass, and the bounds hold over the piece.
+        let fine = [Some(0.1), Some(0.2), Some(-0.4), Some(3.0), None, None];
+        let piece = plate_piece(&scale, start, 1.0, &fine, None).unwrap();
+        let piece = moderate(piece, &scale).unwrap();
+        let [bz, bv, ba] = piece.bounds();
+        let p = PlateMotion::from(piece);
+        for k in 0..=100 {
+            let (z, v, a) = p.motion(Instant::new(f64::from(k) / 100.0));
+            assert!(
+                z.abs() <= bz && v.abs() <= bv && a.abs() <= ba,
+                "{k}: {z} {v} {a}"
+            );
+        }
     }
 
     #[test]

@@ -213,6 +213,22 @@ impl PolyPiece {
         self.coeffs
     }
 
+    /// Upper bounds of `|z|`, `|z'|` and `|z''|` over the piece (`Σ k!/(k−j)! |c_k| h^(k−j)`
+    /// for the `j`-th derivative, `h` the piece's length); infinite when they overflow.
+    pub fn bounds(&self) -> [f64; 3] {
+        let h = self.end.since(self.start).abs();
+        let mut out = [0.0; 3];
+        for (j, o) in out.iter_mut().enumerate() {
+            let mut hk = 1.0;
+            for (k, &c) in self.coeffs.iter().enumerate().skip(j) {
+                let falling = (k + 1 - j..=k).product::<usize>() as f64;
+                *o += falling * c.abs() * hk;
+                hk *= h;
+            }
+        }
+        out
+    }
+
     fn series(&self, t: Instant, out: &mut [f64]) {
         // Taylor shift of the polynomial to s = t − start.
         let s = t.since(self.start);
