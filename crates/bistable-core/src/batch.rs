@@ -238,31 +238,14 @@ impl Batch {
                 };
                 match start {
                     Some(st) => starts.push((lane, st)),
-                    None => {
-                        let mut tag = Tagged { lane, inner: obs };
-                        match slot.sim.compute_step() {
-                            Ok(()) => slot.sim.step_ready(&mut tag),
-                            Err(e) => {
-                                slot.running = false;
-                                stopped.push((lane, Err(e)));
-                            }
-                        }
-                    }
+                    None => lone_step(lane, slot, obs, stopped),
                 }
             }
             // Too few lanes for a pass of the kernel, which costs more for one lane than the
             // lone simulator's step: each takes that step instead (the same step, bit for bit).
             if starts.len() < width.min_kernel_lanes() {
                 for &(lane, _) in starts.iter() {
-                    let slot = slots[lane].as_mut().expect("occupied");
-                    let mut tag = Tagged { lane, inner: obs };
-                    match slot.sim.compute_step() {
-                        Ok(()) => slot.sim.step_ready(&mut tag),
-                        Err(e) => {
-                            slot.running = false;
-                            stopped.push((lane, Err(e)));
-                        }
-                    }
+                    lone_step(lane, slots[lane].as_mut().expect("occupied"), obs, stopped);
                 }
                 continue;
             }
@@ -289,6 +272,23 @@ impl Batch {
                     }
                 }
             }
+        }
+    }
+}
+
+/// The lone simulator's step for `lane` (computed and taken); a failure stops the lane.
+fn lone_step(
+    lane: usize,
+    slot: &mut Slot,
+    obs: &mut impl LaneObserver,
+    stopped: &mut Vec<(usize, Result<bool, SimError>)>,
+) {
+    let mut tag = Tagged { lane, inner: obs };
+    match slot.sim.compute_step() {
+        Ok(()) => slot.sim.step_ready(&mut tag),
+        Err(e) => {
+            slot.running = false;
+            stopped.push((lane, Err(e)));
         }
     }
 }
