@@ -100,9 +100,20 @@ pub fn draw(chart: &mut Chart<'_, '_>, points: &[BifurcationPoint]) -> DrawResul
 /// A Floquet multiplier in JSON.
 #[derive(Debug, Serialize)]
 pub struct Multiplier {
-    re: f64,
-    im: f64,
-    abs: f64,
+    pub re: f64,
+    pub im: f64,
+    pub abs: f64,
+}
+
+impl From<&(f64, f64)> for Multiplier {
+    /// The multiplier `re + i·im`.
+    fn from(&(re, im): &(f64, f64)) -> Self {
+        Self {
+            re,
+            im,
+            abs: re.hypot(im),
+        }
+    }
 }
 
 /// A bifurcation point in JSON (the CSV's columns, multipliers as a list).
@@ -137,15 +148,7 @@ pub fn reports(points: &[BifurcationPoint]) -> Vec<PointReport> {
             x0: p.x0,
             v0: p.v0,
             max_x: Some(p.max_x).filter(|x| x.is_finite()),
-            multipliers: p
-                .multipliers
-                .iter()
-                .map(|&(re, im)| Multiplier {
-                    re,
-                    im,
-                    abs: re.hypot(im),
-                })
-                .collect(),
+            multipliers: p.multipliers.iter().map(Multiplier::from).collect(),
             omega_error: p.omega_error,
             branch: p.branch,
             index: p.index,

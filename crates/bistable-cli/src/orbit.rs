@@ -13,7 +13,7 @@ use bistable_analysis::cycles::settled;
 use bistable_analysis::orbit::{shoot, summarise};
 use bistable_analysis::Model;
 
-use crate::bifurcations;
+use crate::bifurcations::{self, Multiplier};
 use crate::branches;
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
@@ -179,13 +179,6 @@ pub struct OrbitArgs {
 }
 
 #[derive(Debug, Serialize)]
-struct Multiplier {
-    re: f64,
-    im: f64,
-    abs: f64,
-}
-
-#[derive(Debug, Serialize)]
 struct OrbitReport {
     omega: f64,
     velocity: f64,
@@ -272,15 +265,7 @@ fn single(args: &OrbitArgs, omega: f64) -> Result<(), CliError> {
         period: orbit.periods,
         x0: orbit.x0,
         v0: orbit.v0,
-        multipliers: orbit
-            .multipliers
-            .iter()
-            .map(|&(re, im)| Multiplier {
-                re,
-                im,
-                abs: re.hypot(im),
-            })
-            .collect(),
+        multipliers: orbit.multipliers.iter().map(Multiplier::from).collect(),
         max_abs_multiplier: s.max_abs_multiplier,
         stable: orbit.stable,
         floquet_exponent: s.floquet_exponent,
