@@ -267,6 +267,20 @@ fn bifurcation_rows(points: &[BifurcationPoint]) -> Vec<(&'static str, &'static 
         .collect()
 }
 
+/// The continuation method named by `method` (`'natural'` or `'arclength'`) and its name in
+/// summaries.
+fn method_arg(method: &str) -> PyResult<(Method, &'static str)> {
+    match method {
+        "natural" => Ok((Method::Natural, "natural")),
+        "arclength" => Ok((Method::Arclength, "pseudo-arclength")),
+        other => Err(invalid_text(
+            "method",
+            other,
+            "must be 'natural' or 'arclength'",
+        )),
+    }
+}
+
 /// Orbits continued in Ω (see `bistable_impact.continue_omega`).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, period=1, settle=2000, method="natural", threads=0,
@@ -287,17 +301,7 @@ pub(crate) fn continue_omega<'py>(
     chatter: &str,
 ) -> PyResult<Bound<'py, PyDict>> {
     let period = check_period("period", period)?;
-    let (method, method_name) = match method {
-        "natural" => (Method::Natural, "natural"),
-        "arclength" => (Method::Arclength, "pseudo-arclength"),
-        other => {
-            return Err(invalid_text(
-                "method",
-                other,
-                "must be 'natural' or 'arclength'",
-            ))
-        }
-    };
+    let (method, method_name) = method_arg(method)?;
     if omega.is_empty() {
         return Err(invalid_text("omega", "[]", "must have at least one value"));
     }
@@ -460,17 +464,7 @@ pub(crate) fn atlas<'py>(
     chatter: &str,
 ) -> PyResult<Bound<'py, PyList>> {
     let period = check_period("period", period)?;
-    let method = match method {
-        "natural" => Method::Natural,
-        "arclength" => Method::Arclength,
-        other => {
-            return Err(invalid_text(
-                "method",
-                other,
-                "must be 'natural' or 'arclength'",
-            ))
-        }
-    };
+    let (method, _) = method_arg(method)?;
     if omega.is_empty() || omega.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
         return Err(invalid_text(
             "omega",
