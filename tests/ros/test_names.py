@@ -14,7 +14,7 @@ RIG2 = ("-r", "__ns:=/rig2", "-r", "__node:=sim2", "-r", "bistable/impacts:=~/hi
 
 
 def test_two_rigs_in_one_domain_see_only_their_own_impacts():
-    domain = 51
+    domain = 55  # its own: Fast DDS's shared-memory transport reaches across network namespaces
     peer = Spinner(domain, "names_peer")
     got = {name: [] for name in ["/rig1/bistable/impacts", "/rig2/sim2/hits", "/rig2/bistable/impacts",
                                  "/bistable/impacts"]}
@@ -32,8 +32,13 @@ def test_two_rigs_in_one_domain_see_only_their_own_impacts():
             # Everything that tells discovery from the nodes apart: what the peer saw and the nodes' logs.
             seen = {n: len(v) for n, v in {**got, **clocks}.items()}
             graph = (peer.node.get_node_names_and_namespaces(), sorted(dict(peer.node.get_topic_names_and_types())))
+            publishers = {n: [(str(i.endpoint_gid), str(i.qos_profile.reliability)) for i in
+                              peer.node.get_publishers_info_by_topic(n)] for n in got}
+            # The namespace's sockets (ports, receive queues) of the peer and both nodes.
+            sockets = subprocess.run(["ss", "-uanp"], capture_output=True, text=True).stdout
             logs = [p.stop()[-4000:] for p in (rig1, rig2)]
             raise AssertionError(f"no impacts to t = 60 within 40 s: received {seen}; graph {graph}; "
+                                 f"publishers {publishers}; sockets:\n{sockets}\n"
                                  f"rig1 log:\n{logs[0]}\nrig2 log:\n{logs[1]}")
         names = peer.node.get_node_names_and_namespaces()
         assert ("bistable_impact", "/rig1") in names and ("sim2", "/rig2") in names, names

@@ -35,6 +35,9 @@ pub fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
         .map_err(|e| format!("cannot install the signal handler: {e}"))?;
     }
     let runner = Runner::new(&cfg.settings)?;
+    if cfg.stdout {
+        super::ddslog::install(cfg.names.node());
+    }
     let mut dds = Dds::connect(&cfg, range)?;
     register_wakeups(&poll, &mut dds.command_sub, &mut dds.services)
         .map_err(|e| format!("cannot register the readers with the event poll: {e}"))?;

@@ -1,0 +1,87 @@
+//! Warnings and errors of the DDS layer (RustDDS and ros2-client write them through the `log`
+//! crate) in the node's log, in its format, so that a discovery or transport problem shows
+//! where users look. Each source line of the DDS code is shown at most [`PER_SITE`] times: some
+//! warnings repeat at every send while a peer is unreachable.
+
+use std::collections::HashMap;
+use std::sync::Mutex;
+
+/// How many times one warning site of the DDS layer is shown.
+const PER_SITE: u32 = 3;
+
+/// Warnings that say nothing is wrong (target, a part of the message): RustDDS warns of every
+/// datagram over 1,500 bytes, which loopback (MTU 64 KiB) and large impact batches send as a
+/// rule, and ros2-client that `ROS_DISTRO` is unset, which a node started outside a ROS
+/// installation always is.
+const BENIGN: [(&str, &str); 2] = [
+    ("rustdds::network::udp_sender", ": Message size = "),
+    ("ros2_client::distributions", "ROS_DISTRO is not set"),
+];
+
+struct DdsLog {
+    node: String,
+    shown: Mutex<HashMap<(String, u32), u32>>,
+}
+
+impl log::Log for DdsLog {
+    fn enabled(&self, meta: &log::Metadata) -> bool {
+        meta.level() <= log::Level::Warn
+    }
+
+    fn log(&self, record: &log::Record) {
+        if !self.enabled(record.metadata()) || is_benign(record) {
+            return;
+        }
+        let site = (record.target().to_owned(), record.line().unwrap_or(0));
+        let count = {
+            let mut shown = self.shown.lock().unwrap_or_else(|e| e.into_inner());
+            let n = shown.entry(site).or_insert(0);
+            *n += 1;
+            *n
+        };
+        if count > PER_SITE {
+            return;
+        }
+        let tag = if record.level() == log::Level::Error {
+            "ERROR"
+        } else {
+            "WARN"
+        };
+        let now = std::time::SystemTime::now()
+            .duration_since(std::time::UNIX_EPOCH)
+            .map_or(0.0, |d| d.as_secs_f64());
+        let more = if count == PER_SITE {
+            " (not shown again from this place)"
+        } else {
+            ""
+        };
+        eprintln!(
+            "[{tag}] [{now:.9}] [{}]: DDS ({}): {}{more}",
+            self.node,
+            record.target(),
+            record.args()
+        );
+    }
+
+    fn flush(&self) {}
+}
+
+/// Whether `record` is one of the [`BENIGN`] warnings.
+fn is_benign(record: &log::Record) -> bool {
+    record.level() == log::Level::Warn
+        && BENIGN.iter().any(|(target, part)| {
+            record.target() == *target && record.args().to_string().contains(part)
+        })
+}
+
+/// Routes the DDS layer's warnings and errors to standard error as lines of node `node`.
+/// Called once, before the participant is created; a second call changes nothing.
+pub fn install(node: &str) {
+    let logger = DdsLog {
+        node: node.to_owned(),
+        shown: Mutex::new(HashMap::new()),
+    };
+    if log::set_boxed_logger(Box::new(logger)).is_ok() {
+        log::set_max_level(log::LevelFilter::Warn);
+    }
+}
