@@ -1,7 +1,9 @@
 """Benchmarks of the Python package against the CLI, in one run on this machine:
 
 * the response-class map (Fig. 9) through ``bistable_impact.sweep.map`` on a
-  ``dask.distributed`` LocalCluster of 2 worker processes (1 thread each), through ``sweep.map``
+  ``dask.distributed`` LocalCluster of 2 worker processes (1 thread each; the package's
+  ``cluster.local_cluster`` with its lean settings, or with ``--dask-defaults`` Dask's own
+  defaults), through ``sweep.map``
   on 2 local Rust threads, and through ``target/release/bistable map --threads 2``; rounds in
   alternating order, each result checked against the CLI's map (same class at every point);
   wall and CPU time (the CLI's from rusage of the child, the workers' from their
@@ -13,7 +15,7 @@
   (``summary['wall_time_s']``).
 
     .venv/bin/python bench/python_map.py [--omega-range A:B:N] [--velocity-range A:B:N]
-        [--rounds R] [--calls N] [--methods cli,dask,local]
+        [--rounds R] [--calls N] [--methods cli,dask,local] [--dask-defaults]
 
 Prints a Markdown report (machine, load, command, tables) on stdout.
 """
@@ -92,6 +94,9 @@ def main() -> int:
                    help="how long the idle cluster's own CPU use is measured")
     p.add_argument("--methods", default="cli,dask,local",
                    help="which maps to time (comma-separated; cli is always run, as reference)")
+    p.add_argument("--dask-defaults", action="store_true",
+                   help="a LocalCluster with Dask's default settings instead of "
+                        "bistable_impact.cluster.local_cluster (LEAN_CONFIG)")
     a = p.parse_args()
     methods = ["cli"] + [m for m in ("dask", "local") if m in a.methods.split(",")]
     from distributed import Client, LocalCluster
@@ -104,8 +109,9 @@ def main() -> int:
     ref_path = os.path.join(tmp, "cli.csv")
     t = time.perf_counter()
     rounds = 0 if a.no_map else a.rounds
-    cluster = LocalCluster(n_workers=2 if rounds else 0, threads_per_worker=1, processes=True,
-                           dashboard_address=None)  # fmt: skip
+    start = LocalCluster if a.dask_defaults else bi.cluster.local_cluster
+    cluster = start(n_workers=2 if rounds else 0, threads_per_worker=1, processes=True,
+                    dashboard_address=None)  # fmt: skip
     client = Client(cluster)
     client.run(lambda: __import__("bistable_impact"))  # import in the workers before timing
     startup = time.perf_counter() - t
@@ -169,7 +175,8 @@ def main() -> int:
     print(f"- load average (1 min) {load0[0]:.2f} before, {load1[0]:.2f} after")
     print(f"- command: `.venv/bin/python bench/python_map.py --omega-range {a.omega_range} "
           f"--velocity-range {a.velocity_range} --rounds {a.rounds} --calls {a.calls}"
-          f" --methods {','.join(methods)}{' --no-map' if a.no_map else ''}`\n")
+          f" --methods {','.join(methods)}{' --no-map' if a.no_map else ''}"
+          f"{' --dask-defaults' if a.dask_defaults else ''}`\n")
     if a.no_map:
         print_simulate(a.calls, calls, inside)
         return 0
@@ -182,7 +189,8 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|")
     names = {
         "cli": "`bistable map --threads 2`",
-        "dask": f"`sweep.map(client=...)`, LocalCluster 2 processes × 1 thread, chunk {a.chunk or 'auto'}",
+        "dask": f"`sweep.map(client=...)`, LocalCluster 2 processes × 1 thread "
+                f"({'Dask defaults' if a.dask_defaults else '`cluster.local_cluster`'}), chunk {a.chunk or 'auto'}",
         "local": "`sweep.map(threads=2)` (Rust threads in-process)",
     }
     for k in methods:

@@ -49,12 +49,20 @@ def assert_same_map(df, ref):
 
 def test_60_by_40_map_on_two_worker_processes_equals_the_cli(cli, tmp_path):
     # The issue's acceptance grid (Fig. 9's ranges), with short runs (at most 300 natural
-    # periods, the same on both sides) to keep the suite fast.
+    # periods, the same on both sides) to keep the suite fast; on the package's lean cluster,
+    # whose settings reach the scheduler and the worker processes.
+    import dask
+
     w, v = bi.linspace(0.2, 3.5, 60), bi.linspace(0.005, 0.2, 40)
     ref = cli_map(cli, tmp_path, w, v, options=("--max-periods", "300"))
-    with distributed.LocalCluster(
-        n_workers=2, threads_per_worker=1, processes=True, dashboard_address=None
-    ) as cluster, distributed.Client(cluster) as client:
+    with bi.cluster.local_cluster(n_workers=2) as cluster, distributed.Client(cluster) as client:
+        keys = list(bi.cluster.LEAN_CONFIG)
+        settings = lambda: [dask.config.get(k) for k in keys]  # noqa: E731
+        assert settings() != list(bi.cluster.LEAN_CONFIG.values())  # not left set here
+        for got in client.run(settings).values():  # the worker processes'
+            assert got == list(bi.cluster.LEAN_CONFIG.values())
+        # The scheduler (in this process) read its health-check interval [s] when it started.
+        assert client.run_on_scheduler(lambda dask_scheduler: dask_scheduler._tick_interval) == 1.0
         df = bi.sweep.map(w, v, client=client, max_periods=300.0, lyapunov_periods=50)
     assert len(df) == 2400 and len(set(df["class"])) == 3
     assert_same_map(df, ref)

@@ -12,7 +12,9 @@ What it offers mirrors the ``bistable`` CLI: :func:`simulate` and :class:`Simula
 threads or a ``dask.distributed`` client); :func:`orbit`, :func:`continue_omega`,
 :func:`atlas`, :func:`bifurcation`, :func:`energy_map` and :func:`spectrum` (module ``analyses``), which
 return the subcommands' JSON keys as dicts and their CSV files as pandas DataFrames;
-:func:`linspace` gives the values of the CLI's ``A:B:N`` ranges.
+:func:`linspace` gives the values of the CLI's ``A:B:N`` ranges; :func:`cluster.local_cluster
+<bistable_impact.cluster.local_cluster>` starts a Dask cluster with little upkeep of its own for
+the sweeps.
 
 Every argument is checked before any work: a bad value raises ``ValueError`` (a wrong type
 ``TypeError``) naming the argument, with the CLI's rule text; a failed simulation raises
@@ -54,6 +56,7 @@ __all__ = [
     "IMPACT_COLUMNS",
     "SENSITIVITY_DEFAULTS",
     "sweep",
+    "cluster",
 ]
 
 #: Default settings of the sensitivity test of :func:`classify` and :func:`sweep.map
@@ -311,4 +314,5 @@ def linspace(start: float, end: float, n: int) -> np.ndarray:
     return np.array(values, dtype=float)
 
 
+from . import cluster  # noqa: E402
 from . import sweep  # noqa: E402  (uses the functions above)
