@@ -29,12 +29,12 @@ def _die_with_parent():
 
 
 class NodeProcess:
-    """bistable_impact_node with ROS arguments, in DDS domain `domain`. Its stderr is read as it
-    comes (a full pipe would block the node's logging), keeping at most `keep_lines` lines:
-    the first half and the most recent half."""
+    """bistable_impact_node with ROS arguments, in DDS domain `domain` (`env`: more environment
+    variables). Its stderr is read as it comes (a full pipe would block the node's logging),
+    keeping at most `keep_lines` lines: the first half and the most recent half."""
 
-    def __init__(self, *ros_args, domain=0, keep_lines=20000):
-        env = dict(os.environ, ROS_DOMAIN_ID=str(domain))
+    def __init__(self, *ros_args, domain=0, keep_lines=20000, env=None):
+        env = dict(os.environ, ROS_DOMAIN_ID=str(domain), **(env or {}))
         self.proc = subprocess.Popen([NODE, "--ros-args", *ros_args], stderr=subprocess.PIPE, text=True, env=env,
                                      preexec_fn=_die_with_parent)
         self.log = None

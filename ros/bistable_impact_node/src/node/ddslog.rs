@@ -1,7 +1,8 @@
 //! Warnings and errors of the DDS layer (RustDDS and ros2-client write them through the `log`
 //! crate) in the node's log, in its format, so that a discovery or transport problem shows
 //! where users look. Each source line of the DDS code is shown at most [`PER_SITE`] times: some
-//! warnings repeat at every send while a peer is unreachable.
+//! warnings repeat at every send while a peer is unreachable. `BISTABLE_DDS_LOG=info` (or
+//! `debug`, `trace`) shows the DDS layer's lower levels as well, every line, for diagnosis.
 
 use std::collections::HashMap;
 use std::sync::Mutex;
@@ -20,12 +21,14 @@ const BENIGN: [(&str, &str); 2] = [
 
 struct DdsLog {
     node: String,
+    /// The most detailed level shown (warnings unless `BISTABLE_DDS_LOG` says more).
+    level: log::LevelFilter,
     shown: Mutex<HashMap<(String, u32), u32>>,
 }
 
 impl log::Log for DdsLog {
     fn enabled(&self, meta: &log::Metadata) -> bool {
-        meta.level() <= log::Level::Warn
+        meta.level() <= self.level
     }
 
     fn log(&self, record: &log::Record) {
@@ -39,18 +42,20 @@ impl log::Log for DdsLog {
             *n += 1;
             *n
         };
-        if count > PER_SITE {
+        let limited = record.level() <= log::Level::Warn;
+        if limited && count > PER_SITE {
             return;
         }
-        let tag = if record.level() == log::Level::Error {
-            "ERROR"
-        } else {
-            "WARN"
+        let tag = match record.level() {
+            log::Level::Error => "ERROR",
+            log::Level::Warn => "WARN",
+            log::Level::Info => "INFO",
+            log::Level::Debug | log::Level::Trace => "DEBUG",
         };
         let now = std::time::SystemTime::now()
             .duration_since(std::time::UNIX_EPOCH)
             .map_or(0.0, |d| d.as_secs_f64());
-        let more = if count == PER_SITE {
+        let more = if limited && count == PER_SITE {
             " (not shown again from this place)"
         } else {
             ""
@@ -74,14 +79,20 @@ fn is_benign(record: &log::Record) -> bool {
         })
 }
 
-/// Routes the DDS layer's warnings and errors to standard error as lines of node `node`.
-/// Called once, before the participant is created; a second call changes nothing.
+/// Routes the DDS layer's warnings and errors (and the lower levels `BISTABLE_DDS_LOG` asks
+/// for) to standard error as lines of node `node`. Called once, before the participant is
+/// created; a second call changes nothing.
 pub fn install(node: &str) {
+    let level = std::env::var("BISTABLE_DDS_LOG")
+        .ok()
+        .and_then(|v| v.parse::<log::LevelFilter>().ok())
+        .map_or(log::LevelFilter::Warn, |l| l.max(log::LevelFilter::Warn));
     let logger = DdsLog {
         node: node.to_owned(),
+        level,
         shown: Mutex::new(HashMap::new()),
     };
     if log::set_boxed_logger(Box::new(logger)).is_ok() {
-        log::set_max_level(log::LevelFilter::Warn);
+        log::set_max_level(level);
     }
 }
