@@ -52,6 +52,9 @@ int me_run(fmi2Component c, double t0, double t_end, double h, double next, long
     while (t < t_end) {
         if (F.fmi2GetContinuousStates(c, x, 2) != fmi2OK || indicators(c, t, x, z0)) return -1;
         double step = fmin(h, fmin(t_end, next) - t);
+        /* A time event at or before t (announced by the last event update, or given by the
+         * caller) would make every later step 0: the driver would loop at one instant. */
+        if (!(step > 0)) return ME_NO_PROGRESS;
         if (rk4(c, t, x, step, x1) || indicators(c, t + step, x1, z1)) return -1;
         int event = crossed(z0, z1);
         if (event) {
