@@ -263,7 +263,8 @@ impl Me {
     }
 
     /// `fmi2SetTime`: `t` (s) must be finite, not before the last event and within the clock
-    /// range of the shaker.
+    /// range of the shaker. A time at or after the time event announced by
+    /// [`Me::next_event_time`] puts `τ` at or after the event (see `Me::tail_due`).
     pub fn set_time(&mut self, t: f64) -> Result<(), String> {
         let tau = self.scale.tau(t);
         // Rounding allowance as for co-simulation communication points: 1e-9 relative, in s.
@@ -282,6 +283,13 @@ impl Me {
                 omega.max(1.0) * (tau - origin.to_f64())
             ));
         }
+        // A time at or after the announced time event reaches it, whatever `t·ω0` rounds to.
+        let announced = self.s.tail.map_or(f64::INFINITY, |tail| tail.until);
+        let tau = if t >= self.scale.time(announced) {
+            tau.max(announced)
+        } else {
+            tau
+        };
         self.s.tau = tau.max(self.s.event_tau);
         Ok(())
     }

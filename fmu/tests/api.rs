@@ -1484,7 +1484,7 @@ fn model_exchange_state_across_the_barrier_before_its_event_restores() {
 fn model_exchange_time_events_are_due_at_the_time_they_announce() {
     let params = [
         (var::omega0, 1.2314973701554512),
-        (var::Omega, 0.31567602743490469),
+        (var::Omega, 0.3156760274349047),
         (var::V, 0.016579423043057092),
         (var::e, 0.18776913593613076),
         (var::zeta, 0.17808901653899142),
