@@ -25,6 +25,8 @@
  *   - a truncated, extended, bit-flipped or random byte buffer is refused; a buffer with a
  *     recomputed checksum ("crafted": one field mutated) is either refused or gives a state that
  *     satisfies all of the above.
+ * Every generated call is timed (the summary names the slowest, with its seed and call; the ME
+ * calls, driver runs included, are in the ring of recent calls too).
  * A per-call watchdog (FUZZ_CALL_TIMEOUT seconds, default 20) reports a hang; a crash is reported
  * with the seed and the last calls. FUZZ_TRACE=1 prints every call, FUZZ_QUIET=1 only failing
  * seeds, FUZZ_SAVE_DIR=DIR writes accepted crafted buffers and, on a failure, the serialized state
