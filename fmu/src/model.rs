@@ -1197,16 +1197,18 @@ fn impulse_of(events: &[Event]) -> f64 {
         .fold(0.0, |a, b| a + b)
 }
 
-/// Counts what an advance computes, stopping at the first event.
+/// Counts what an advance computes, stopping at the first event (its time kept).
 #[derive(Default)]
 struct Probe {
     steps: u32,
     events: u32,
+    first_event: Option<f64>,
 }
 
 impl Observer for Probe {
-    fn event(&mut self, _: &Event) -> ControlFlow<()> {
+    fn event(&mut self, e: &Event) -> ControlFlow<()> {
         self.events += 1;
+        self.first_event.get_or_insert(e.t());
         ControlFlow::Break(())
     }
 
@@ -1217,9 +1219,12 @@ impl Observer for Probe {
 
 /// A saved core state is inside its current Taylor step (as every state the core stops at is):
 /// going on from the saved step start to the saved time needs at most the one step and meets no
-/// event (a state where the core stopped with a Discard may fail that step again). A state whose
-/// time lies beyond its step (e.g. a step start moved far back) would otherwise report an
-/// extrapolated state or integrate across the gap.
+/// event before that time (a state where the core stopped with a Discard may fail that step
+/// again). An event at the saved time itself, reached without a step, is one still pending at
+/// that instant: a state saved at an early return between two events of one instant (an impact
+/// with `e = 0` and the plastic start of sticking it causes, found by the FMI 3.0 fuzz mode, seed
+/// 261) is the FMU's own. A state whose time lies beyond its step (e.g. a step start moved far
+/// back) would otherwise report an extrapolated state or integrate across the gap.
 fn check_inside_step(sim: &Simulator, omega: f64) -> Result<(), String> {
     let cp = sim.checkpoint();
     let (t0, now) = (cp.t0, sim.instant());
@@ -1230,7 +1235,8 @@ fn check_inside_step(sim: &Simulator, omega: f64) -> Result<(), String> {
             Ok(_) | Err(SimError::Zeno { .. } | SimError::NonFinite { .. }) => true,
             Err(_) => false,
         };
-    let inside = reached && probe.steps <= 1 && probe.events == 0;
+    let pending_now = probe.steps == 0 && probe.first_event == Some(sim.time());
+    let inside = reached && probe.steps <= 1 && (probe.events == 0 || pending_now);
     if inside {
         Ok(())
     } else {

@@ -1137,6 +1137,11 @@ fn plate_impulse_is_the_momentum_of_the_steps_impacts() {
 /// Settles the events of a Model Exchange instance in event mode and enters continuous-time
 /// mode; returns whether the states changed.
 fn me_events(f: &Fmu) -> bool {
+    me_update(f).valuesOfContinuousStatesChanged != fmi2False
+}
+
+/// [`me_events`] returning the event info of the update.
+fn me_update(f: &Fmu) -> fmi2EventInfo {
     let mut info = fmi2EventInfo::default();
     unsafe {
         assert_eq!(
@@ -1148,13 +1153,40 @@ fn me_events(f: &Fmu) -> bool {
         assert_eq!(info.newDiscreteStatesNeeded, fmi2False);
         assert_eq!(fmi2EnterContinuousTimeMode(f.c), fmi2OK);
     }
-    info.valuesOfContinuousStatesChanged != fmi2False
+    info
+}
+
+/// What [`me_run_timed`] did.
+#[derive(Debug, Default)]
+struct MeRun {
+    /// Integration steps (RK4 steps taken, each ending after its start).
+    steps: u64,
+    /// Steps shortened to a time event (the FMU's `nextEventTime`).
+    time_events: u64,
+    /// Steps shortened to a bisected sign change of an event indicator.
+    crossings: u64,
 }
 
 /// Fixed-step RK4 of a Model Exchange instance from its time `f.t` to `t_end` with step `h`,
 /// every sign change of an event indicator bisected to 1e-13 (time on its far side) and handled
-/// in event mode.
+/// in event mode. Time events are left to `fmi2CompletedIntegratorStep` (see [`me_run_timed`]).
 fn me_run(f: &mut Fmu, t_end: f64, h: f64) {
+    me_run_with(f, t_end, h, None);
+}
+
+/// [`me_run`] that also ends a step at each time event the FMU announces (`nextEventTime`, as
+/// fmpy's and the C host's drivers do) and enters event mode there. Panics when an event update
+/// announces a time event that is not after the current time or a step makes no progress (a
+/// host honouring such an event would loop for ever at one instant). `next`: the time event
+/// announced by the last event update (infinite: none).
+fn me_run_timed(f: &mut Fmu, t_end: f64, h: f64, next: f64) -> MeRun {
+    me_run_with(f, t_end, h, Some(next))
+}
+
+fn me_run_with(f: &mut Fmu, t_end: f64, h: f64, next: Option<f64>) -> MeRun {
+    let mut run = MeRun::default();
+    let time_events = next.is_some();
+    let mut next = next.unwrap_or(f64::INFINITY);
     let deriv = |f: &Fmu, t: f64, x: [f64; 2]| -> [f64; 2] {
         let mut d = [0.0; 2];
         unsafe {
@@ -1196,10 +1228,18 @@ fn me_run(f: &mut Fmu, t_end: f64, h: f64) {
         let mut x = [0.0; 2];
         unsafe { assert_eq!(fmi2GetContinuousStates(f.c, x.as_mut_ptr(), 2), fmi2OK) };
         let z0 = indicators(f, f.t, x);
-        let step = h.min(t_end - f.t);
+        let step = h.min(t_end.min(next) - f.t);
+        assert!(
+            step > 0.0,
+            "no progress at t = {} s: time event at {next} s",
+            f.t
+        );
+        // A step to the time event ends exactly at the announced time.
+        let at_time_event = next - f.t <= h && next <= t_end;
         let mut x1 = rk4(f, f.t, x, step);
-        let mut t1 = f.t + step;
+        let mut t1 = if at_time_event { next } else { f.t + step };
         if crossed(z0, indicators(f, t1, x1)) {
+            run.crossings += 1;
             let (mut lo, mut hi) = (0.0, step);
             while hi - lo > 1e-13 {
                 let mid = 0.5 * (lo + hi);
@@ -1222,12 +1262,31 @@ fn me_run(f: &mut Fmu, t_end: f64, h: f64) {
                 fmi2OK
             );
         }
+        let shortened = t1 < if at_time_event { next } else { f.t + step };
         f.t = t1;
-        if enter != fmi2False || t1 < f.t + step || crossed(z0, indicators(f, t1, x1)) {
+        run.steps += 1;
+        let time_event = time_events && at_time_event && !shortened;
+        if time_event {
+            run.time_events += 1;
+        }
+        if enter != fmi2False || shortened || time_event || crossed(z0, indicators(f, t1, x1)) {
             unsafe { assert_eq!(fmi2EnterEventMode(f.c), fmi2OK) };
-            me_events(f);
+            let info = me_update(f);
+            if time_events {
+                next = if info.nextEventTimeDefined != fmi2False {
+                    info.nextEventTime
+                } else {
+                    f64::INFINITY
+                };
+                assert!(
+                    next > f.t,
+                    "the event update at t = {} s announces a time event at {next} s, not after it",
+                    f.t
+                );
+            }
         }
     }
+    run
 }
 
 #[test]
@@ -1408,4 +1467,49 @@ fn model_exchange_state_across_the_barrier_before_its_event_restores() {
         assert_eq!((f.int(var::well), f.int(var::snap_through_count)), (2, 1));
         assert_eq!(fmi2FreeFMUstate(f.c, &mut state), fmi2OK);
     }
+}
+
+/// Found by the C host's fuzz mode (seed 468 of 201-500, the Model Exchange part: one fuzz
+/// call "hung" until the 20 s watchdog): with `omega0 != 1` the time event of a chatter tail
+/// (its start of sticking, `until` in τ, announced as `until/omega0` s) was not due when the
+/// host set the time to it (`τ = t·omega0` came back an ulp before `until`), so every event
+/// update announced the same time again and a driver honouring time events stepped by 0 for
+/// ever (5.8 million event iterations in 8 s, each FMI call fast). These are the fuzz run's
+/// parameters from the paper's start; a driver that lands on every announced time event meets
+/// such a round trip at t = 32.9 s (this test failed there before the fix, with the no-progress
+/// assertion of [`me_run_timed`]). Work bound: every step advances, so the driver takes at most
+/// one step per `h` plus one per time event and per bisected crossing; the chatter tails are
+/// applied and counted (impacts equal to co-simulation's).
+#[test]
+fn model_exchange_time_events_are_due_at_the_time_they_announce() {
+    let params = [
+        (var::omega0, 1.2314973701554512),
+        (var::Omega, 0.3156760274349047),
+        (var::V, 0.016579423043057092),
+        (var::e, 0.18776913593613076),
+        (var::zeta, 0.17808901653899142),
+    ];
+    let mut f = Fmu::started_as(fmi2ModelExchange, &params);
+    let (t_end, h) = (60.0, 2e-3);
+    let first = me_update(&f);
+    let next = if first.nextEventTimeDefined != fmi2False {
+        first.nextEventTime
+    } else {
+        f64::INFINITY
+    };
+    let run = me_run_timed(&mut f, t_end, h, next);
+    // 4 time events of chatter tails in this run (the 3rd, at 32.9 s, was the one never due).
+    assert!(
+        run.time_events >= 3,
+        "{run:?}: the run reaches chatter tails"
+    );
+    let bound = (t_end / h).ceil() as u64 + run.time_events + run.crossings;
+    assert!(run.steps <= bound, "{run:?}: more steps than {bound}");
+    let mut cs = Fmu::started(&params);
+    assert_eq!(cs.step(t_end), fmi2OK);
+    assert_eq!(
+        f.int(var::impact_count),
+        cs.int(var::impact_count),
+        "{run:?}"
+    );
 }

@@ -25,6 +25,8 @@
  *   - a truncated, extended, bit-flipped or random byte buffer is refused; a buffer with a
  *     recomputed checksum ("crafted": one field mutated) is either refused or gives a state that
  *     satisfies all of the above.
+ * Every generated call is timed (the summary names the slowest, with its seed and call; the ME
+ * calls, driver runs included, are in the ring of recent calls too).
  * A per-call watchdog (FUZZ_CALL_TIMEOUT seconds, default 20) reports a hang; a crash is reported
  * with the seed and the last calls. FUZZ_TRACE=1 prints every call, FUZZ_QUIET=1 only failing
  * seeds, FUZZ_SAVE_DIR=DIR writes accepted crafted buffers and, on a failure, the serialized state
@@ -1944,7 +1946,18 @@ static void me_act(void) {
         if (M.life == M_CONT) {
             long events = 0;
             double h = logu(1e-4, 0.05), t_end = M.t + h * (1 + pick(40));
-            int ok = me_run(M.c, M.t, t_end, h, M.next, &events) == 0;
+            snprintf(pending, sizeof pending,
+                     "ME driver run from t %.17g to %.17g, h %.17g, next time event %.17g", M.t,
+                     t_end, h, M.next);
+            int rc = me_run(M.c, M.t, t_end, h, M.next, &events);
+            pending[0] = 0;
+            note("ME driver run from t %.17g to %.17g, h %.17g: %s, %ld event modes", M.t, t_end, h,
+                 rc == 0 ? "OK" : "refused", events);
+            /* Even with extreme parameters an event update must announce a later time event. */
+            if (rc == ME_NO_PROGRESS)
+                check(0, "ME driver: an event update at t = %.17g s announced a time event not "
+                      "after it (the host would step by 0 for ever)", me_real("time"));
+            int ok = rc == 0;
             check(ok || M.wild, "ME driver run to %g (sane parameters)", t_end);
             if (!ok) { /* extreme parameters: a refused call ends the run, the instance stays usable */
                 double now_x[2];
@@ -2130,9 +2143,8 @@ static void me_sequence(long ncalls) {
     expected_name = "mefuzz";
     me_start();
     for (long k = 0; k < ncalls && M.c; k++, call_now++) {
-        arm();
-        if (trace) printf("me call %ld in %s\n", k, me_life[M.life]);
-        me_act();
+        note("ME call %ld in %s", k, me_life[M.life]);
+        timed_call(me_act);
     }
     if (M.c) {
         if (M.held) F.fmi2FreeFMUstate(M.c, &M.held);

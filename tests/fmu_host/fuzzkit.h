@@ -1,8 +1,9 @@
 /* The harness shared by the fuzzers `host fuzz` (fuzz.c, FMI 2.0) and `host3 fuzz` (fmi3/fuzz3.c,
  * FMI 3.0): deterministic random numbers (splitmix64), the state of the seed in progress (seed,
  * call, failures, digest), the ring of recent calls, failure reports (at most 5 printed per seed),
- * the per-call watchdog and crash report, the arguments and FUZZ_* options, the per-seed set-up and
- * the summary. The fuzzer sets `kit` (its counters and hooks) before its first seed. All static
+ * the per-call watchdog and crash report, the wall time of every generated call (the slowest one
+ * is reported in the summary: a benchmark figure, not checked), the arguments and FUZZ_* options,
+ * the per-seed set-up and the summary. The fuzzer sets `kit` (its counters and hooks) before its first seed. All static
  * (inline: a fuzzer need not use every function). */
 #ifndef BISTABLE_FUZZKIT_H
 #define BISTABLE_FUZZKIT_H
@@ -15,6 +16,7 @@
 #include <stdlib.h>
 #include <string.h>
 #include <sys/time.h>
+#include <time.h>
 #include <unistd.h>
 
 /* What the harness needs from the fuzzer. */
@@ -143,12 +145,35 @@ static inline void seed_begin(unsigned long seed, uint64_t salt) {
     memset(kit.cnt, 0, sizeof *kit.cnt * (size_t)kit.ncnt);
 }
 
+/* ---- wall time per generated call ---- */
+static double slowest = -1;          /* wall time (s) of the slowest generated call so far */
+static unsigned long slowest_seed;
+static long slowest_call;
+static char slowest_note[320];      /* the last call recorded in the ring before it ended */
+static double calls_timed;
+
+static inline double kit_clock(void) {
+    struct timespec ts;
+    clock_gettime(CLOCK_MONOTONIC, &ts);
+    return (double)ts.tv_sec + 1e-9 * (double)ts.tv_nsec;
+}
+
+/* One generated call under the watchdog, timed. */
+static inline void timed_call(void (*act)(void)) {
+    arm();
+    double t0 = kit_clock();
+    act();
+    double dt = kit_clock() - t0;
+    calls_timed++;
+    if (dt > slowest) {
+        slowest = dt, slowest_seed = seed_now, slowest_call = call_now;
+        snprintf(slowest_note, sizeof slowest_note, "%s", ring_n ? ring[(ring_n - 1) % RING] : "");
+    }
+}
+
 /* Calls `act` under the watchdog until the seed's budget of calls is spent. */
 static inline void run_calls(long ncalls, void (*act)(void)) {
-    for (call_now = 0; *kit.calls < ncalls; call_now++) {
-        arm();
-        act();
-    }
+    for (call_now = 0; *kit.calls < ncalls; call_now++) timed_call(act);
 }
 
 /* Ends a seed (after its summary line): counters added to the totals. */
@@ -185,9 +210,14 @@ static inline int fuzz_run(const char *seeds, const char *ncalls_text, void (*se
     return 1;
 }
 
-/* The totals of all seeds, one a line, names padded to `width`. */
+/* The totals of all seeds, one a line, names padded to `width`; then the slowest generated call
+ * (wall time, with its seed, call number and last recorded FMI call). */
 static inline void print_totals(const char **names, int width) {
     for (int k = 0; k < kit.ncnt; k++) printf("fuzz:   %-*s %ld\n", width, names[k], kit.total[k]);
+    if (slowest >= 0)
+        printf("fuzz:   %-*s %.3g s of %.0f calls (seed %lu call %ld, last recorded: %s)\n", width,
+               "slowest call (wall)", slowest, calls_timed, slowest_seed, slowest_call,
+               slowest_note);
 }
 
 /* The summary's last line; the exit code (1 if any invariant failed). */

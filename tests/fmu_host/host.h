@@ -79,7 +79,10 @@ void me_tests(void);
  * mode), `*next` the next time event or INFINITY; 0 on success. */
 int me_settle(fmi2Component c, double *next);
 /* The ME driver: continuous-time mode from t0 to t_end with RK4 steps h, indicator sign changes
- * bisected to 1e-12 s, time event at `next`; `*events` counts event modes. 0 on success. */
+ * bisected to 1e-12 s, time event at `next`; `*events` counts event modes. 0 on success, -1 on a
+ * refused call, ME_NO_PROGRESS when the next time event is not after the current time (the step
+ * would be 0; a host honouring it would loop at one instant). */
+#define ME_NO_PROGRESS (-2)
 int me_run(fmi2Component c, double t0, double t_end, double h, double next, long *events);
 
 /* `host bench` (bench.c): the host-loop table (FMI 2.0 and 3.0, co-simulation and Model

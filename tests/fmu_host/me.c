@@ -52,6 +52,9 @@ int me_run(fmi2Component c, double t0, double t_end, double h, double next, long
     while (t < t_end) {
         if (F.fmi2GetContinuousStates(c, x, 2) != fmi2OK || indicators(c, t, x, z0)) return -1;
         double step = fmin(h, fmin(t_end, next) - t);
+        /* A time event at or before t (announced by the last event update, or given by the
+         * caller) would make every later step 0: the driver would loop at one instant. */
+        if (!(step > 0)) return ME_NO_PROGRESS;
         if (rk4(c, t, x, step, x1) || indicators(c, t + step, x1, z1)) return -1;
         int event = crossed(z0, z1);
         if (event) {
@@ -203,8 +206,55 @@ static void me_illegal_calls(void) {
     F.fmi2FreeInstance(c);
 }
 
+/* Found by the fuzz mode (seed 468, 20,000 calls: its Model Exchange part ran into the 20 s
+ * watchdog): with omega0 != 1 the time event of a chatter tail (start of sticking, announced as
+ * until/omega0 s) was not due when the driver set the time to it (t*omega0 came back an ulp before
+ * until), so every event update announced the same time and this driver stepped by 0 for ever
+ * (5.8 million event modes in 8 s). The fuzz run's parameters from the paper's start: the run
+ * reaches t = 60 with every time event after the time of its update (me_run returns
+ * ME_NO_PROGRESS otherwise, as it did before the fix with this h, after 4 impacts), its work
+ * bounded by its steps of size h (event modes: at most a tenth of them), and it counts the
+ * co-simulation's impacts (the tails were applied). */
+static void me_time_events_progress(void) {
+    const char *names[5] = {"omega0", "Omega", "V", "e", "zeta"};
+    const fmi2Real vals[5] = {1.2314973701554512, 0.31567602743490469, 0.016579423043057092,
+                              0.18776913593613076, 0.17808901653899142};
+    fmi2ValueReference vrs[5];
+    for (int k = 0; k < 5; k++) vrs[k] = vr(names[k]);
+    const double t_end = 60, h = 2.5e-3;
+    int n[2] = {-1, -1};
+    long events = 0, rc = -1;
+    double next = INFINITY;
+    for (int kind = 0; kind < 2; kind++) { /* fmi2ModelExchange, fmi2CoSimulation */
+        fmi2Component c = F.fmi2Instantiate("me", kind, guid, NULL, &callbacks, fmi2False, fmi2False);
+        int ok = c && F.fmi2SetupExperiment(c, fmi2False, 0, 0.0, fmi2False, 0) == fmi2OK &&
+                 F.fmi2SetReal(c, vrs, 5, vals) == fmi2OK &&
+                 F.fmi2EnterInitializationMode(c) == fmi2OK &&
+                 F.fmi2ExitInitializationMode(c) == fmi2OK &&
+                 (kind == fmi2CoSimulation || me_settle(c, &next) == 0);
+        hcheck(ok, "time events: instantiate and initialize (omega0 = 1.2314973701554512)");
+        if (ok && kind == fmi2ModelExchange) rc = me_run(c, 0, t_end, h, next, &events);
+        if (ok && kind == fmi2CoSimulation) ok = F.fmi2DoStep(c, 0, t_end, fmi2True) == fmi2OK;
+        if (ok) n[kind] = count(c);
+        if (c) F.fmi2FreeInstance(c);
+    }
+    char what[256];
+    snprintf(what, sizeof what, "time events: the ME driver reaches t = %g (status %ld; %d is a "
+             "time event not after the current time)", t_end, rc, ME_NO_PROGRESS);
+    hcheck(rc == 0, what);
+    long bound = (long)(t_end / h) / 10;
+    snprintf(what, sizeof what, "time events: %ld event modes <= %ld (a tenth of the %g steps)",
+             events, bound, t_end / h);
+    hcheck(events > 0 && events <= bound, what);
+    snprintf(what, sizeof what, "time events: ME impact count %d = co-simulation's %d", n[0], n[1]);
+    hcheck(n[0] > 0 && n[0] == n[1], what);
+    printf("me: time events (omega0 = 1.2314973701554512, t <= %g): %ld event modes, %d impacts\n",
+           t_end, events, n[0]);
+}
+
 void me_tests(void) {
     me_illegal_calls();
+    me_time_events_progress();
     me_against_cs("baseline Omega=1.75 V=0.07 t<=200", 1.75, 0.07, 200, 1e-3);
     me_against_cs("chatter Omega=0.2 V=0.05 t<=60", 0.2, 0.05, 60, 1e-3);
 }
