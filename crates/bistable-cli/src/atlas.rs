@@ -8,13 +8,16 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use bistable_analysis::bifurcations::{locate, Branch, Kind};
+use bistable_analysis::codim2::{self, Codim2Point};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::twoparam::{trace_all, CurveOptions, CurvePoint};
+
+use crate::atlas_points;
 
 use crate::classify::{Record, RecordCsv, CSV_COLUMNS};
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
-use crate::output::{print_json, print_text, CsvFile, Field};
+use crate::output::{print_json, print_text, sibling, CsvFile, Field};
 use crate::plot::{self, Chart, DrawResult, Mark, FONT};
 use crate::progress::StageBars;
 use crate::ranges::{Pair, Range};
@@ -156,6 +159,7 @@ struct Summary {
     omega_range: String,
     period: u32,
     curves: Vec<CurveSummary>,
+    points: Vec<atlas_points::PointReport>,
     #[serde(skip_serializing_if = "Option::is_none")]
     map_check: Option<MapCheck>,
     files: Vec<PathBuf>,
@@ -280,6 +284,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
             kind.name()
         ))
     })?;
+    let points = codim2::points(&models[0], &all, o);
     let mut files = Vec::new();
     if let Some(path) = &args.out {
         let mut csv = CsvFile::create(path, COLUMNS)?;
@@ -303,6 +308,11 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
             }
         }
         files.push(csv.finish()?);
+        files.push(atlas_points::write_csv(
+            &sibling(path, "_points.csv"),
+            &all,
+            &points,
+        )?);
     }
     lines.splice(
         0..0,
@@ -332,7 +342,8 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                     file.display()
                 );
                 let refs: Vec<&Record> = records.iter().collect();
-                let legend = line_legend(&lines);
+                let mut legend = line_legend(&lines);
+                legend.extend(atlas_points::legend(&points));
                 plot::png(path, crate::map::MAP_SIZE, |root| {
                     crate::map::draw_map(
                         root,
@@ -340,7 +351,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                         e,
                         grid_of(records),
                         (&refs, &[]),
-                        (&legend, |chart| draw_lines(chart, &lines)),
+                        (&legend, |chart| draw_lines(chart, &lines, &points)),
                     )
                 })?;
             }
@@ -350,7 +361,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                     path,
                     (&title, &subtitle),
                     e,
-                    &lines,
+                    (&lines, &points),
                     (o.omega_bounds, o.velocity_bounds),
                 )?;
             }
@@ -380,6 +391,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                 velocity_max: fold(f64::max, c, |q| q.velocity),
             })
             .collect(),
+        points: atlas_points::reports(&all, &points),
         map_check,
         files,
     };
@@ -406,6 +418,11 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
     if summary.curves.is_empty() {
         text.push_str("  no fold or period doubling on the branches\n");
     }
+    text.push_str(&format!(
+        "codimension-two points on the curves: {}\n",
+        points.len()
+    ));
+    text.push_str(&atlas_points::human(&points));
     if let Some(c) = &summary.map_check {
         text.push_str(&format!(
             "P-1/P-2 neighbour pairs of the map crossed by a P-1 → P-2 curve: {} of {} \
@@ -614,8 +631,9 @@ fn line_legend(lines: &[Line]) -> Vec<(Mark, String)> {
     .collect()
 }
 
-/// The curves as thin lines on a white underlay, each labelled at its middle point.
-fn draw_lines(chart: &mut Chart<'_, '_>, lines: &[Line]) -> DrawResult {
+/// The curves as thin lines on a white underlay, each labelled at its middle point, and the
+/// codimension-two points on them.
+fn draw_lines(chart: &mut Chart<'_, '_>, lines: &[Line], points: &[Codim2Point]) -> DrawResult {
     for l in lines {
         plot::thick_line(chart, &l.points, WHITE, 3)?;
         plot::thick_line(chart, &l.points, colour(l.kind), 2)?;
@@ -640,7 +658,7 @@ fn draw_lines(chart: &mut Chart<'_, '_>, lines: &[Line]) -> DrawResult {
         ))?;
         area.draw(&Text::new(text, (x, y), style.clone()))?;
     }
-    Ok(())
+    atlas_points::draw(chart, points)
 }
 
 /// The curves without a map: axes from the curves (`bounds`, the Ω and V bounds of the run,
@@ -649,7 +667,7 @@ fn draw_alone(
     path: &Path,
     (title, subtitle): (&str, &str),
     e: f64,
-    lines: &[Line],
+    (lines, points): (&[Line], &[Codim2Point]),
     bounds: ((f64, f64), (f64, f64)),
 ) -> Result<(), CliError> {
     let pts = || lines.iter().flat_map(|l| l.points.iter().copied());
@@ -663,6 +681,7 @@ fn draw_alone(
     };
     let mut legend = plot::threshold_legend(e);
     legend.extend(line_legend(lines));
+    legend.extend(atlas_points::legend(points));
     plot::png(path, (1300, 900), |root| {
         let area = plot::header(root, title, subtitle, &legend)?;
         let mut chart = plot::chart(
@@ -674,7 +693,7 @@ fn draw_alone(
             None,
         )?;
         plot::draw_thresholds(root, &chart, e)?;
-        draw_lines(&mut chart, lines)
+        draw_lines(&mut chart, lines, points)
     })
 }
 
