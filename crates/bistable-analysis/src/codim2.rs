@@ -35,6 +35,10 @@ use crate::Model;
 pub const S_TOL: f64 = 1e-10;
 /// Step (in `(x, x')`) of the central difference of `M·q` along `q`.
 pub const CUSP_STEP: f64 = 1e-5;
+/// A curve's end whose orbit is this close to the plate at plate phase 0 (`|x0|`, units of
+/// `Δx`; the plate is at 0 then) is an impact crossing the stroboscopic section, where the
+/// section's impact count and state jump: no grazing, not reported.
+pub const SECTION_CONTACT: f64 = 1e-4;
 /// Most trial points spent on one root or end.
 const MAX_TRIALS: usize = 100;
 /// Newton on a crossing stops when its step in `s` is this short.
@@ -315,6 +319,15 @@ fn sign_changes(sys: &System<'_>, k: usize, curve: &[CurvePoint], out: &mut Vec<
 }
 
 /// The ends of curve `k` inside the bounds of `o` where the impacts per period change.
+///
+/// From the end point, trials along the curve are bisected to [`S_TOL`] between the last one
+/// the corrector solves on the curve's side (same impacts and sticking) and the first it does
+/// not. The corrector's finite differences fail once their stencil straddles the grazing, so
+/// the change itself is then located on the tangent line from that last trial `u`: the impacts
+/// of the period map at `u + σ·t` are bisected in `σ`. The tangent line leaves the curve by
+/// about `κ·σ²` (`κ`: the curve's curvature from its last two tangents), which with the
+/// brackets bounds the error. Ends at an impact at the section ([`SECTION_CONTACT`]) are left
+/// out; the multipliers reported are those of `u`.
 fn grazing_ends(
     sys: &System<'_>,
     k: usize,
@@ -335,26 +348,21 @@ fn grazing_ends(
         let (w, wp) = (w_of(c), w_of(p));
         let Ok(v_end) = sys.value(w) else { continue };
         let side = (v_end.2, v_end.3);
-        let Some(chart) = Chart::new(sys, w, [0, 1, 2, 3].map(|i| w[i] - wp[i])) else {
+        let out_of = |a: [f64; 4], b: [f64; 4]| [0, 1, 2, 3].map(|i| a[i] - b[i]);
+        let (Some(chart), Some(before)) = (
+            Chart::new(sys, w, out_of(w, wp)),
+            Chart::new(sys, wp, out_of(w, wp)),
+        ) else {
             continue;
         };
-        // Trials on the curve's side; a converged trial on another side gives the impacts
-        // beyond.
-        let mut beyond = None;
-        let mut good = |s: f64| match chart.at(s) {
-            Some((u, v, _)) if (v.2, v.3) == side => Some((u, v)),
-            Some((_, v, _)) => {
-                beyond = Some((v.2, v.3));
-                None
-            }
-            None => None,
-        };
-        let (mut lo, mut at_lo) = (0.0, (w, v_end));
+        let good = |s: f64| chart.at(s).filter(|(_, v, _)| (v.2, v.3) == side);
+        // The first trial off the curve's side, doubling from 1e-6 of the largest step.
+        let (mut lo, mut u, mut v_u) = (0.0, w, v_end);
         let mut hi = None;
         let mut s = 1e-6 * o.ds_max;
         while s <= o.ds_max {
             match good(s) {
-                Some(g) => (lo, at_lo) = (s, g),
+                Some(g) => (lo, u, v_u) = (s, g.0, g.1),
                 None => {
                     hi = Some(s);
                     break;
@@ -363,32 +371,67 @@ fn grazing_ends(
             s *= 2.0;
         }
         let Some(mut hi) = hi else { continue };
+        if u[0].abs() <= SECTION_CONTACT {
+            continue;
+        }
         for _ in 0..MAX_TRIALS {
             if hi - lo <= S_TOL {
                 break;
             }
             let mid = 0.5 * (lo + hi);
             match good(mid) {
-                Some(g) => (lo, at_lo) = (mid, g),
+                Some(g) => (lo, u, v_u) = (mid, g.0, g.1),
                 None => hi = mid,
             }
         }
-        // The impacts just beyond: from a converged trial there, else from the period map at
-        // the end's point moved on by the bracket along the tangent.
-        let (u, v) = at_lo;
-        let beyond = beyond.or_else(|| {
-            let b = [0, 1, 2, 3].map(|i| u[i] + (hi - lo) * chart.t[i]);
+        // The impacts along the tangent line from u.
+        let impacts_at = |sigma: f64| {
+            let b = [0, 1, 2, 3].map(|i| u[i] + sigma * chart.t[i]);
             let m = sys.model_at(b[2], b[3]).ok()?;
             let r = period_map(&m, b[2], sys.period, [b[0], b[1]], false).ok()?;
             Some((r.2, r.3))
-        });
-        if let Some((impacts, sticks)) = beyond {
-            if impacts != side.0 && sticks == side.1 {
-                let mut p = located(PointKind::ResonantGrazing, k, end, (u, &v), hi - lo);
-                p.impacts_beyond = impacts;
-                out.push(p);
+        };
+        let (mut same, mut sigma) = (0.0, S_TOL);
+        let mut far = None;
+        while sigma <= o.ds_max {
+            match impacts_at(sigma) {
+                Some(r) if r == side => same = sigma,
+                Some((impacts, sticks)) if sticks == side.1 => {
+                    far = Some((sigma, impacts));
+                    break;
+                }
+                _ => break,
+            }
+            sigma *= 2.0;
+        }
+        let Some((mut far, mut beyond)) = far else {
+            continue;
+        };
+        for _ in 0..MAX_TRIALS {
+            if far - same <= S_TOL {
+                break;
+            }
+            let mid = 0.5 * (same + far);
+            match impacts_at(mid) {
+                Some(r) if r == side => same = mid,
+                Some((impacts, sticks)) if sticks == side.1 => (far, beyond) = (mid, impacts),
+                _ => break,
             }
         }
+        let at = [0, 1, 2, 3].map(|i| u[i] + same * chart.t[i]);
+        let kappa = out_of(chart.t, before.t)
+            .iter()
+            .map(|d| d * d)
+            .sum::<f64>()
+            .sqrt()
+            / chart
+                .s_of(w)
+                .abs()
+                .max(dot(out_of(w, wp), out_of(w, wp)).sqrt());
+        let error = (hi - lo) + (far - same) + kappa * far * far;
+        let mut q = located(PointKind::ResonantGrazing, k, end, (at, &v_u), error);
+        q.impacts_beyond = beyond;
+        out.push(q);
     }
 }
 
