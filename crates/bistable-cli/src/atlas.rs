@@ -40,9 +40,17 @@ period change (the condition is not smooth there), the step collapses, or after
 --max-points points each way. A located point already on a traced curve (one
 that turns in V meets --velocity twice) starts no second curve.
 
+Codimension-two points on the curves are located and reported: fold_flip (the
+other multiplier passes −1 on a fold curve, +1 on a period-doubling curve; none
+in this model, where 0 < det M < 1), cusp (on a fold curve the fold's normal-form
+coefficient vanishes: two folds meet and the curve turns back in (Ω, V)),
+resonant_grazing (a curve ends inside the bounds because the impacts per period
+change) and crossing (two curves meet in (Ω, V)), each to 1e-10 along the curve
+where it converges.
+
 --plot draws the curves (with those of --curves files from earlier runs) in the
 (Ω, V) plane as thin lines, one colour per kind, each labelled (P-n → P-2n,
-fold P-n), with the thresholds of Eq. 16–18 (as 'bistable thresholds'), over
+fold P-n), this run's codimension-two points as markers, with the thresholds of Eq. 16–18 (as 'bistable thresholds'), over
 the cells of a 'bistable map' CSV when --map is given (its grid sets the axes;
 else the curves do). With --map the summary also reports the check of issue
 22: of the pairs of horizontally or vertically adjacent map cells with periods
@@ -56,10 +64,19 @@ CSV (--out): one row per curve point,
   multiplier_2_re,multiplier_2_im,impacts
 (curve: its number in the summary; kind: fold or period_doubling; x0, v0: the
 fixed point at plate phase 0; points ordered by the curve, low V end first).
+<stem>_points.csv beside it: one row per codimension-two point,
+  kind,omega,velocity,curve,index,other_curve,other_index,period,x0,v0,
+  multiplier_1_re,multiplier_1_im,multiplier_2_re,multiplier_2_im,impacts,
+  impacts_beyond,error
+(kind: fold_flip, cusp, resonant_grazing or crossing; between points index and
+index + 1 of curve (resonant grazing: beyond its end point index); crossing:
+other_curve and other_index, empty otherwise; the orbit of curve there;
+impacts_beyond: past a resonant grazing; error: bound along the curve).
 The summary (--json) lists per curve its start (the point located at
---velocity), points, and the Ω and V it spans; with --map, \"map_check\": pairs,
-crossed, fraction, omega_span, velocity_span, pairs_in_span,
-crossed_in_span, fraction_in_span.
+--velocity), points, and the Ω and V it spans; \"points\": the CSV's rows as
+objects (multipliers as [{re, im, abs}], other_curve/other_index null when
+empty); with --map, \"map_check\": pairs, crossed, fraction, omega_span,
+velocity_span, pairs_in_span, crossed_in_span, fraction_in_span.
 
 Exit codes: 0 success; 2 invalid options; 1 a simulation failed or a file could
 not be written.
@@ -109,7 +126,7 @@ pub struct AtlasArgs {
     #[arg(long, value_name = "N", default_value_t = 2000)]
     pub settle: u32,
 
-    /// Write the curves to FILE.csv.
+    /// Write the curves to FILE.csv and their codimension-two points to FILE_points.csv.
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
 

@@ -8,10 +8,10 @@ use pyo3::types::{PyDict, PyList};
 use bistable_analysis::arclength::ArcPoint;
 use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch, Kind};
 use bistable_analysis::branches::Branches;
+use bistable_analysis::codim2::{self, Codim2Point, PointKind};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::cycles::settled;
 use bistable_analysis::orbit::{shoot, summarise};
-use bistable_analysis::codim2::{self, Codim2Point, PointKind};
 use bistable_analysis::twoparam::{trace_all, Atlas, CurveOptions};
 use bistable_analysis::Model;
 
@@ -447,7 +447,10 @@ fn atlas_rows(all: &Atlas) -> Vec<(&'static str, &'static str, Col)> {
 fn point_rows(all: &Atlas, points: &[Codim2Point]) -> Vec<(&'static str, &'static str, Col)> {
     let mut c: [Col; 17] = Default::default();
     for p in points {
-        let kind = PointKind::ALL.iter().position(|&q| q == p.kind).unwrap_or(0);
+        let kind = PointKind::ALL
+            .iter()
+            .position(|&q| q == p.kind)
+            .unwrap_or(0);
         let m = p.multipliers;
         let (other, other_index) = p.other.map_or((-1, -1), |(a, b)| (a as i64, b as i64));
         c[0].i(kind as i64);
