@@ -125,13 +125,9 @@ fn p2_period_doubling_curve_agrees_with_one_parameter_continuation() {
     }
 }
 
-/// The atlas of the P-1 branches followed by arclength over `a..b` (`n` values) at `velocity`,
-/// with its codimension-two points.
-fn atlas(
-    (a, b, n): (f64, f64, usize),
-    velocity: f64,
-    o: CurveOptions,
-) -> (Atlas, Vec<Codim2Point>) {
+/// The models of the P-1 branches followed by arclength over `a..b` (`n` values) at
+/// `velocity`, and the bifurcation points located on them.
+fn located((a, b, n): (f64, f64, usize), velocity: f64) -> (Vec<Model>, Vec<BifurcationPoint>) {
     let models = grid(a, b, n, velocity);
     let threads = Threads::new(2).unwrap();
     let Curves::Arclength(t) = continue_orbits::<SimError>(
@@ -152,6 +148,13 @@ fn atlas(
         &mut |_| Ok(()),
     )
     .unwrap();
+    (models, found)
+}
+
+/// The atlas of the P-1 branches followed by arclength over `a..b` (`n` values) at `velocity`,
+/// with its codimension-two points.
+fn atlas(grid: (f64, f64, usize), velocity: f64, o: CurveOptions) -> (Atlas, Vec<Codim2Point>) {
+    let (models, found) = located(grid, velocity);
     let all = trace_all(&models[0], found, o).unwrap();
     let points = codim2::points(&models[0], &all, o);
     (all, points)
@@ -203,6 +206,26 @@ fn the_resonance_fold_ends_in_a_cusp_at_its_extremum() {
     };
     let (a, b) = (step(c.index - 1), step(c.index + 1));
     assert!(a.0 * b.0 + a.1 * b.1 < 0.0, "{a:?} {b:?}");
+    // ... and two folds meet there: by one-parameter arclength continuation over Ω 1.70..1.90,
+    // 3e-4 above its V two folds lie within 0.01 of its Ω (the hysteresis), 1.2e-3 below
+    // none.
+    let folds = |v: f64| -> Vec<f64> {
+        let (_, found) = located((1.70, 1.90, 81), v);
+        found
+            .iter()
+            .filter(|p| p.kind == Kind::Fold)
+            .map(|p| p.omega)
+            .collect()
+    };
+    let above = folds(c.velocity + 3e-4);
+    eprintln!("folds at V = cusp + 3e-4: {above:?}");
+    assert_eq!(above.len(), 2, "{above:?}");
+    assert!(
+        above.iter().all(|w| (w - c.omega).abs() < 0.01),
+        "{above:?}"
+    );
+    let below = folds(c.velocity - 1.2e-3);
+    assert!(below.is_empty(), "{below:?}");
     // No fold–flip: det M = λ1·λ2 lies in (0, 1) all along (the other multiplier cannot be −1).
     assert!(points.iter().all(|p| p.kind != PointKind::FoldFlip));
     for (_, curve) in &all {
