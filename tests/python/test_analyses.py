@@ -182,6 +182,33 @@ def test_atlas_equals_cli(cli, tmp_path):
     assert_frames_equal(df, csv)
 
 
+def test_atlas_points_equal_cli(cli, tmp_path):
+    # The resonance fold from V = 0.05 down to its cusp, and its crossing with the
+    # high-energy branch's doubling (docs/bifurcations.md).
+    csv = tmp_path / "cusp.csv"
+    ref = cli_json(cli, "atlas", "--continue-omega", "1.0:2.5:61", "--velocity", 0.05,
+                   "--arclength", "--velocity-bounds", "0.001,0.2", "--max-points", 2000,
+                   "--out", csv, "--threads", 2)
+    curves, pts = bi.atlas(bi.linspace(1.0, 2.5, 61), 0.05, (0.001, 0.2), method="arclength",
+                           max_points=2000, threads=2, points=True)
+    assert_frames_equal(curves, csv)
+    assert list(pts.columns) == list(bi.analyses.ATLAS_POINT_COLUMNS)
+    assert {"cusp", "crossing"} <= set(pts["kind"])
+    assert list(pts["kind"]) == [p["kind"] for p in ref["points"]]
+    ref_csv = pd.read_csv(tmp_path / "cusp_points.csv")
+    # The CSV leaves other_curve and other_index empty where the DataFrame has -1.
+    for c in ("other_curve", "other_index"):
+        ref_csv[c] = ref_csv[c].fillna(-1).astype(int)
+    ref_csv.to_csv(tmp_path / "cusp_points_filled.csv", index=False)
+    assert_frames_equal(pts, tmp_path / "cusp_points_filled.csv")
+    cusp = pts[pts["kind"] == "cusp"].iloc[0]
+    assert abs(cusp["omega"] - 1.8141767194) < 1e-9 and abs(cusp["velocity"] - 0.0071755267) < 1e-9
+    # Without points=True, the curves alone, as before.
+    assert bi.atlas(bi.linspace(1.2, 1.6, 41), 0.05, (0.03, 0.07), method="arclength",
+                    threads=2).equals(bi.atlas(bi.linspace(1.2, 1.6, 41), 0.05, (0.03, 0.07),
+                                               method="arclength", threads=2, points=True)[0])
+
+
 def test_atlas_errors():
     w = bi.linspace(2.05, 2.25, 5)
     with pytest.raises(ValueError, match="for 'velocity_bounds'"):

@@ -28,6 +28,7 @@ pub mod basins;
 pub mod bifurcation;
 pub mod bifurcations;
 pub mod branches;
+pub mod codim2;
 pub mod continuation;
 pub mod cycles;
 pub mod energy;

@@ -88,18 +88,38 @@ impl From<SimError> for CurveError {
 }
 
 /// The augmented system of one curve.
-struct System<'a> {
+pub(crate) struct System<'a> {
     model: &'a Model,
-    period: u32,
+    pub(crate) period: u32,
     /// +1 for a fold (`det(M − I)`), −1 for a period doubling (`det(M + I)`).
-    sign: f64,
+    pub(crate) sign: f64,
 }
 
 /// `Φ(w) = (P(y) − y, h)` with `M`, impacts and sticking.
-type Value = ([f64; 3], [[f64; 2]; 2], u64, bool);
+pub(crate) type Value = ([f64; 3], [[f64; 2]; 2], u64, bool);
 
-impl System<'_> {
-    fn value(&self, w: [f64; 4]) -> Result<Value, SimError> {
+impl<'a> System<'a> {
+    /// The system of the curves of `kind` (fold or period doubling) of `period`-periodic
+    /// orbits (`model`: any model of the run's ζ and e).
+    pub(crate) fn new(model: &'a Model, kind: Kind, period: u32) -> Result<Self, CurveError> {
+        let sign = match kind {
+            Kind::Fold => 1.0,
+            Kind::PeriodDoubling => -1.0,
+            k => return Err(CurveError::Kind(k)),
+        };
+        Ok(Self {
+            model,
+            period,
+            sign,
+        })
+    }
+
+    /// The model at `(Ω, V)`.
+    pub(crate) fn model_at(&self, omega: f64, velocity: f64) -> Result<Model, SimError> {
+        Ok(self.model.at(omega, velocity)?)
+    }
+
+    pub(crate) fn value(&self, w: [f64; 4]) -> Result<Value, SimError> {
         let m = self.model.at(w[2], w[3])?;
         let (py, mm, impacts, sticks) = period_map(&m, w[2], self.period, [w[0], w[1]], true)?;
         let s = self.sign;
@@ -109,7 +129,10 @@ impl System<'_> {
 
     /// `Φ(w)`, its 3×4 Jacobian, `M`, impacts and sticking.
     #[allow(clippy::type_complexity)]
-    fn jacobian(&self, w: [f64; 4]) -> Result<([f64; 3], [[f64; 4]; 3], Value), SimError> {
+    pub(crate) fn jacobian(
+        &self,
+        w: [f64; 4],
+    ) -> Result<([f64; 3], [[f64; 4]; 3], Value), SimError> {
         let v = self.value(w)?;
         let mut jac = [[0.0; 4]; 3];
         for k in 0..4 {
@@ -135,7 +158,11 @@ impl System<'_> {
     /// Newton from `pred` with the arclength condition `t·(w − pred) = 0`: the point, its
     /// value and its Jacobian.
     #[allow(clippy::type_complexity)]
-    fn correct(&self, pred: [f64; 4], t: [f64; 4]) -> Option<([f64; 4], Value, [[f64; 4]; 3])> {
+    pub(crate) fn correct(
+        &self,
+        pred: [f64; 4],
+        t: [f64; 4],
+    ) -> Option<([f64; 4], Value, [[f64; 4]; 3])> {
         let mut w = pred;
         for _ in 0..12 {
             let (f, jac, v) = self.jacobian(w).ok()?;
@@ -157,7 +184,7 @@ impl System<'_> {
 
 /// Unit null vector of the 3×4 Jacobian, oriented along `along` (its product with it
 /// positive).
-fn tangent(jac: [[f64; 4]; 3], along: [f64; 4]) -> Option<[f64; 4]> {
+pub(crate) fn tangent(jac: [[f64; 4]; 3], along: [f64; 4]) -> Option<[f64; 4]> {
     let t = solve4([jac[0], jac[1], jac[2], along], [0.0, 0.0, 0.0, 1.0])?;
     let n = t.iter().map(|c| c * c).sum::<f64>().sqrt();
     (n.is_finite() && n > 0.0).then(|| t.map(|c| c / n))
@@ -208,16 +235,7 @@ pub fn continue_point(
     start: &BifurcationPoint,
     o: CurveOptions,
 ) -> Result<Vec<CurvePoint>, CurveError> {
-    let sign = match start.kind {
-        Kind::Fold => 1.0,
-        Kind::PeriodDoubling => -1.0,
-        k => return Err(CurveError::Kind(k)),
-    };
-    let sys = System {
-        model,
-        period: start.period,
-        sign,
-    };
+    let sys = System::new(model, start.kind, start.period)?;
     // Polish the start at its V (the arclength condition fixes V).
     let w0 = [start.x0, start.v0, start.omega, start.velocity];
     let Some((w0, v0, jac0)) = sys.correct(w0, [0.0, 0.0, 0.0, 1.0]) else {

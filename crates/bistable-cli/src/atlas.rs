@@ -8,13 +8,16 @@ use plotters::prelude::*;
 use serde::Serialize;
 
 use bistable_analysis::bifurcations::{locate, Branch, Kind};
+use bistable_analysis::codim2::{self, Codim2Point};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::twoparam::{trace_all, CurveOptions, CurvePoint};
+
+use crate::atlas_points;
 
 use crate::classify::{Record, RecordCsv, CSV_COLUMNS};
 use crate::common::{lanes, threads, ModelArgs};
 use crate::error::CliError;
-use crate::output::{print_json, print_text, CsvFile, Field};
+use crate::output::{print_json, print_text, sibling, CsvFile, Field};
 use crate::plot::{self, Chart, DrawResult, Mark, FONT};
 use crate::progress::StageBars;
 use crate::ranges::{Pair, Range};
@@ -37,9 +40,17 @@ period change (the condition is not smooth there), the step collapses, or after
 --max-points points each way. A located point already on a traced curve (one
 that turns in V meets --velocity twice) starts no second curve.
 
+Codimension-two points on the curves are located and reported: fold_flip (the
+other multiplier passes −1 on a fold curve, +1 on a period-doubling curve; none
+in this model, where 0 < det M < 1), cusp (on a fold curve the fold's normal-form
+coefficient vanishes: two folds meet and the curve turns back in (Ω, V)),
+resonant_grazing (a curve ends inside the bounds because the impacts per period
+change) and crossing (two curves meet in (Ω, V)), each to 1e-10 along the curve
+where it converges.
+
 --plot draws the curves (with those of --curves files from earlier runs) in the
 (Ω, V) plane as thin lines, one colour per kind, each labelled (P-n → P-2n,
-fold P-n), with the thresholds of Eq. 16–18 (as 'bistable thresholds'), over
+fold P-n), this run's codimension-two points as markers, with the thresholds of Eq. 16–18 (as 'bistable thresholds'), over
 the cells of a 'bistable map' CSV when --map is given (its grid sets the axes;
 else the curves do). With --map the summary also reports the check of issue
 22: of the pairs of horizontally or vertically adjacent map cells with periods
@@ -53,10 +64,19 @@ CSV (--out): one row per curve point,
   multiplier_2_re,multiplier_2_im,impacts
 (curve: its number in the summary; kind: fold or period_doubling; x0, v0: the
 fixed point at plate phase 0; points ordered by the curve, low V end first).
+<stem>_points.csv beside it: one row per codimension-two point,
+  kind,omega,velocity,curve,index,other_curve,other_index,period,x0,v0,
+  multiplier_1_re,multiplier_1_im,multiplier_2_re,multiplier_2_im,impacts,
+  impacts_beyond,error
+(kind: fold_flip, cusp, resonant_grazing or crossing; between points index and
+index + 1 of curve (resonant grazing: beyond its end point index); crossing:
+other_curve and other_index, empty otherwise; the orbit of curve there;
+impacts_beyond: past a resonant grazing; error: bound along the curve).
 The summary (--json) lists per curve its start (the point located at
---velocity), points, and the Ω and V it spans; with --map, \"map_check\": pairs,
-crossed, fraction, omega_span, velocity_span, pairs_in_span,
-crossed_in_span, fraction_in_span.
+--velocity), points, and the Ω and V it spans; \"points\": the CSV's rows as
+objects (multipliers as [{re, im, abs}], other_curve/other_index null when
+empty); with --map, \"map_check\": pairs, crossed, fraction, omega_span,
+velocity_span, pairs_in_span, crossed_in_span, fraction_in_span.
 
 Exit codes: 0 success; 2 invalid options; 1 a simulation failed or a file could
 not be written.
@@ -106,7 +126,7 @@ pub struct AtlasArgs {
     #[arg(long, value_name = "N", default_value_t = 2000)]
     pub settle: u32,
 
-    /// Write the curves to FILE.csv.
+    /// Write the curves to FILE.csv and their codimension-two points to FILE_points.csv.
     #[arg(long, value_name = "FILE.csv")]
     pub out: Option<PathBuf>,
 
@@ -156,6 +176,7 @@ struct Summary {
     omega_range: String,
     period: u32,
     curves: Vec<CurveSummary>,
+    points: Vec<atlas_points::PointReport>,
     #[serde(skip_serializing_if = "Option::is_none")]
     map_check: Option<MapCheck>,
     files: Vec<PathBuf>,
@@ -280,6 +301,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
             kind.name()
         ))
     })?;
+    let points = codim2::points(&models[0], &all, o);
     let mut files = Vec::new();
     if let Some(path) = &args.out {
         let mut csv = CsvFile::create(path, COLUMNS)?;
@@ -303,6 +325,11 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
             }
         }
         files.push(csv.finish()?);
+        files.push(atlas_points::write_csv(
+            &sibling(path, "_points.csv"),
+            &all,
+            &points,
+        )?);
     }
     lines.splice(
         0..0,
@@ -332,7 +359,8 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                     file.display()
                 );
                 let refs: Vec<&Record> = records.iter().collect();
-                let legend = line_legend(&lines);
+                let mut legend = line_legend(&lines);
+                legend.extend(atlas_points::legend(&points));
                 plot::png(path, crate::map::MAP_SIZE, |root| {
                     crate::map::draw_map(
                         root,
@@ -340,7 +368,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                         e,
                         grid_of(records),
                         (&refs, &[]),
-                        (&legend, |chart| draw_lines(chart, &lines)),
+                        (&legend, |chart| draw_lines(chart, &lines, &points)),
                     )
                 })?;
             }
@@ -350,7 +378,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                     path,
                     (&title, &subtitle),
                     e,
-                    &lines,
+                    (&lines, &points),
                     (o.omega_bounds, o.velocity_bounds),
                 )?;
             }
@@ -380,6 +408,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
                 velocity_max: fold(f64::max, c, |q| q.velocity),
             })
             .collect(),
+        points: atlas_points::reports(&all, &points),
         map_check,
         files,
     };
@@ -406,6 +435,11 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
     if summary.curves.is_empty() {
         text.push_str("  no fold or period doubling on the branches\n");
     }
+    text.push_str(&format!(
+        "codimension-two points on the curves: {}\n",
+        points.len()
+    ));
+    text.push_str(&atlas_points::human(&points));
     if let Some(c) = &summary.map_check {
         text.push_str(&format!(
             "P-1/P-2 neighbour pairs of the map crossed by a P-1 → P-2 curve: {} of {} \
@@ -614,8 +648,9 @@ fn line_legend(lines: &[Line]) -> Vec<(Mark, String)> {
     .collect()
 }
 
-/// The curves as thin lines on a white underlay, each labelled at its middle point.
-fn draw_lines(chart: &mut Chart<'_, '_>, lines: &[Line]) -> DrawResult {
+/// The curves as thin lines on a white underlay, each labelled at its middle point, and the
+/// codimension-two points on them.
+fn draw_lines(chart: &mut Chart<'_, '_>, lines: &[Line], points: &[Codim2Point]) -> DrawResult {
     for l in lines {
         plot::thick_line(chart, &l.points, WHITE, 3)?;
         plot::thick_line(chart, &l.points, colour(l.kind), 2)?;
@@ -640,7 +675,7 @@ fn draw_lines(chart: &mut Chart<'_, '_>, lines: &[Line]) -> DrawResult {
         ))?;
         area.draw(&Text::new(text, (x, y), style.clone()))?;
     }
-    Ok(())
+    atlas_points::draw(chart, points)
 }
 
 /// The curves without a map: axes from the curves (`bounds`, the Ω and V bounds of the run,
@@ -649,7 +684,7 @@ fn draw_alone(
     path: &Path,
     (title, subtitle): (&str, &str),
     e: f64,
-    lines: &[Line],
+    (lines, points): (&[Line], &[Codim2Point]),
     bounds: ((f64, f64), (f64, f64)),
 ) -> Result<(), CliError> {
     let pts = || lines.iter().flat_map(|l| l.points.iter().copied());
@@ -663,6 +698,7 @@ fn draw_alone(
     };
     let mut legend = plot::threshold_legend(e);
     legend.extend(line_legend(lines));
+    legend.extend(atlas_points::legend(points));
     plot::png(path, (1300, 900), |root| {
         let area = plot::header(root, title, subtitle, &legend)?;
         let mut chart = plot::chart(
@@ -674,7 +710,7 @@ fn draw_alone(
             None,
         )?;
         plot::draw_thresholds(root, &chart, e)?;
-        draw_lines(&mut chart, lines)
+        draw_lines(&mut chart, lines, points)
     })
 }
 

@@ -39,6 +39,7 @@
 #![allow(rustdoc::invalid_html_tags)]
 
 mod atlas;
+mod atlas_points;
 mod basins;
 mod bifurcation;
 mod bifurcations;

@@ -1190,6 +1190,58 @@ fn atlas_continues_the_fig6_period_doubling_in_omega_and_v() {
 }
 
 #[test]
+fn atlas_reports_codimension_two_points() {
+    // At V = 0.05: the resonance fold and the high-energy branch's doubling cross at
+    // (Ω, V) = (1.3805425687, 0.0606302369) (docs/bifurcations.md).
+    let dir = scratch("atlas-points");
+    let (csv, png) = (dir.join("fold.csv"), dir.join("fold.png"));
+    let c = json(&[
+        "atlas",
+        "--continue-omega",
+        "1.2:1.6:41",
+        "--velocity",
+        "0.05",
+        "--arclength",
+        "--velocity-bounds",
+        "0.03,0.07",
+        "--out",
+        s(&csv),
+        "--plot",
+        s(&png),
+        "--json",
+    ]);
+    let points = c["points"].as_array().unwrap();
+    assert_eq!(points.len(), 1, "{c}");
+    let p = &points[0];
+    assert_eq!(p["kind"], "crossing");
+    assert_eq!(
+        (p["curve"].as_u64(), p["other_curve"].as_u64()),
+        (Some(0), Some(1))
+    );
+    let at = |k: &str| p[k].as_f64().unwrap();
+    assert!((at("omega") - 1.3805425687).abs() < 1e-9, "{p}");
+    assert!((at("velocity") - 0.0606302369).abs() < 1e-9, "{p}");
+    assert!(at("error") <= 1e-12, "{p}");
+    // The same in <stem>_points.csv, written beside --out and listed with the files.
+    let rows = csv_rows(&dir.join("fold_points.csv"));
+    assert_eq!(rows.len(), 1);
+    assert_eq!(rows[0]["kind"], "crossing");
+    assert_eq!(rows[0]["omega"].parse::<f64>().unwrap(), at("omega"));
+    assert_eq!(rows[0]["other_curve"], "1");
+    let files: Vec<&str> = c["files"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|f| f.as_str().unwrap())
+        .collect();
+    assert!(
+        files.iter().any(|f| f.ends_with("fold_points.csv")),
+        "{files:?}"
+    );
+    assert!(std::fs::metadata(&png).unwrap().len() > 0);
+}
+
+#[test]
 fn atlas_plot_over_a_map_and_the_p1_p2_check() {
     let dir = scratch("atlas-map");
     let (map, curves, png) = (

@@ -8,6 +8,7 @@ use pyo3::types::{PyDict, PyList};
 use bistable_analysis::arclength::ArcPoint;
 use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch, Kind};
 use bistable_analysis::branches::Branches;
+use bistable_analysis::codim2::{self, Codim2Point, PointKind};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::cycles::settled;
 use bistable_analysis::orbit::{shoot, summarise};
@@ -440,7 +441,64 @@ fn atlas_rows(all: &Atlas) -> Vec<(&'static str, &'static str, Col)> {
         .collect()
 }
 
-/// Fold and period-doubling curves in (Ω, V) (see `bistable_impact.atlas`).
+/// The codimension-two points of an atlas, one row per point: the columns of `bistable atlas`'s
+/// `_points.csv`, with `kind` as its index in `PointKind::ALL` (the Python side names it) and
+/// `other_curve`, `other_index` −1 where the CSV leaves them empty.
+fn point_rows(all: &Atlas, points: &[Codim2Point]) -> Vec<(&'static str, &'static str, Col)> {
+    let mut c: [Col; 17] = Default::default();
+    for p in points {
+        let kind = PointKind::ALL
+            .iter()
+            .position(|&q| q == p.kind)
+            .unwrap_or(0);
+        let m = p.multipliers;
+        let (other, other_index) = p.other.map_or((-1, -1), |(a, b)| (a as i64, b as i64));
+        c[0].i(kind as i64);
+        c[1].f(p.omega);
+        c[2].f(p.velocity);
+        c[3].i(p.curve as i64);
+        c[4].i(p.index as i64);
+        c[5].i(other);
+        c[6].i(other_index);
+        c[7].i(i64::from(all[p.curve].0.period));
+        c[8].f(p.x0);
+        c[9].f(p.v0);
+        c[10].f(m[0].0);
+        c[11].f(m[0].1);
+        c[12].f(m[1].0);
+        c[13].f(m[1].1);
+        c[14].i(p.impacts as i64);
+        c[15].i(p.impacts_beyond as i64);
+        c[16].f(p.error);
+    }
+    let names = [
+        ("kind", "i8"),
+        ("omega", "f8"),
+        ("velocity", "f8"),
+        ("curve", "i8"),
+        ("index", "i8"),
+        ("other_curve", "i8"),
+        ("other_index", "i8"),
+        ("period", "i8"),
+        ("x0", "f8"),
+        ("v0", "f8"),
+        ("multiplier_1_re", "f8"),
+        ("multiplier_1_im", "f8"),
+        ("multiplier_2_re", "f8"),
+        ("multiplier_2_im", "f8"),
+        ("impacts", "i8"),
+        ("impacts_beyond", "i8"),
+        ("error", "f8"),
+    ];
+    names
+        .into_iter()
+        .zip(c)
+        .map(|((n, t), c)| (n, t, c))
+        .collect()
+}
+
+/// Fold and period-doubling curves in (Ω, V) and their codimension-two points (see
+/// `bistable_impact.atlas`): `{"curves": table, "points": table}`.
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, velocity_bounds, period=1, method="natural", ds=0.005,
     max_points=200, settle=2000, threads=0, lanes=4, zeta=0.02, restitution=0.85, tol=1e-16,
@@ -462,7 +520,7 @@ pub(crate) fn atlas<'py>(
     restitution: f64,
     tol: f64,
     chatter: &str,
-) -> PyResult<Bound<'py, PyList>> {
+) -> PyResult<Bound<'py, PyDict>> {
     let period = check_period("period", period)?;
     let (method, _) = method_arg(method)?;
     if omega.is_empty() || omega.iter().any(|w| !(w.is_finite() && *w > 0.0)) {
@@ -511,7 +569,10 @@ pub(crate) fn atlas<'py>(
                 Curves::Arclength(t) => Branch::from_traces(&models[0], period, t),
             };
             let found = locate(&on, threads, &mut |_| check_signals())?;
-            Ok(trace_all(&models[0], found, o))
+            Ok(trace_all(&models[0], found, o).map(|all| {
+                let points = codim2::points(&models[0], &all, o);
+                (all, points)
+            }))
         },
         |e: Stop| e.into_py(py),
     )?
@@ -521,5 +582,9 @@ pub(crate) fn atlas<'py>(
             kind.name()
         ))
     })?;
-    table(py, atlas_rows(&all))
+    let (all, points) = all;
+    let out = PyDict::new(py);
+    out.set_item("curves", table(py, atlas_rows(&all))?)?;
+    out.set_item("points", table(py, point_rows(&all, &points))?)?;
+    Ok(out)
 }

@@ -111,7 +111,8 @@ def continue_omega(
     tol: float = 1e-16,
     chatter: str = "accumulation",
 ) -> Dict[str, Any]: ...
-# atlas's table has "kind" coded as continue_omega's "bifurcations" table.
+# atlas's "curves" table has "kind" coded as continue_omega's "bifurcations" table; its
+# "points" table codes "kind" as fold_flip, cusp, resonant_grazing, crossing (0..3).
 def atlas(
     omega: List[float],
     velocity: float,
@@ -127,7 +128,7 @@ def atlas(
     restitution: float = 0.85,
     tol: float = 1e-16,
     chatter: str = "accumulation",
-) -> List[Column]: ...
+) -> Dict[str, List[Column]]: ...
 def bifurcation(
     param: str,
     values: List[float],

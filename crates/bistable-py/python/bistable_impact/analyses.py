@@ -45,6 +45,16 @@ ATLAS_COLUMNS = (
     "multiplier_1_im", "multiplier_2_re", "multiplier_2_im", "impacts",
 )  # fmt: skip
 
+#: Columns of ``atlas(..., points=True)``'s points DataFrame (the CLI's ``_points.csv``).
+ATLAS_POINT_COLUMNS = (
+    "kind", "omega", "velocity", "curve", "index", "other_curve", "other_index", "period",
+    "x0", "v0", "multiplier_1_re", "multiplier_1_im", "multiplier_2_re", "multiplier_2_im",
+    "impacts", "impacts_beyond", "error",
+)  # fmt: skip
+
+#: ``kind`` of the codimension-two points, by the code the native module uses.
+_POINT_KINDS = np.array(["fold_flip", "cusp", "resonant_grazing", "crossing"], dtype=object)
+
 #: ``kind`` of the bifurcation points, by the code the native module uses.
 _BIFURCATION_KINDS = np.array(
     ["fold", "period_doubling", "neimark_sacker", "grazing", "sticking"], dtype=object
@@ -206,6 +216,7 @@ def atlas(
     restitution: float = 0.85,
     tol: float = 1e-16,
     chatter: str = "accumulation",
+    points: bool = False,
 ):
     """Fold and period-doubling curves in ``(Ω, V)``, as ``bistable atlas --out``: the
     ``period``-periodic orbits are continued over ``omega`` at ``velocity`` (as
@@ -221,6 +232,17 @@ def atlas(
     ``period``, ``omega``, ``velocity``, the fixed point ``x0, v0`` at plate phase 0, the
     multipliers (one at +1 or −1) and ``impacts`` per orbit; each curve from its low-``V`` end.
 
+    With ``points=True``, returns ``(curves, points)``: ``points`` is a DataFrame with the
+    columns of the CLI's ``<stem>_points.csv`` (:data:`ATLAS_POINT_COLUMNS`), one row per
+    codimension-two point on the curves: ``kind`` (``'fold_flip'``: multipliers +1 and −1 at
+    once, none in this model since ``0 < det M < 1``; ``'cusp'``: the fold's normal-form
+    coefficient vanishes, two folds meet; ``'resonant_grazing'``: the curve ends where the
+    impacts per period change, ``impacts`` → ``impacts_beyond``; ``'crossing'``: two curves
+    meet in ``(Ω, V)``, ``other_curve`` and ``other_index`` name the other, −1 for the other
+    kinds), ``omega``, ``velocity``, the ``curve`` and the ``index`` of its segment, the
+    orbit there (``x0, v0``, multipliers) and ``error``, the bound on the error along the
+    curve (≤ 1e-10 when converged; see ``docs/bifurcations.md``).
+
     Args:
         omega: the grid of ``Ω`` (> 0) the branches are continued over.
         velocity: ``V`` of the branches (>= 0).
@@ -231,6 +253,7 @@ def atlas(
         max_points: most points of a curve each way from its start (>= 1).
         settle, threads, lanes, zeta, restitution, tol, chatter: as for
             :func:`continue_omega`.
+        points: also return the codimension-two points.
 
     Raises:
         ValueError: a bad argument (named). RuntimeError: a simulation failed or a curve could
@@ -251,9 +274,13 @@ def atlas(
         chatter=check.text("chatter", chatter),
         **m,
     )
-    df = Table(rows).to_pandas()
+    df = Table(rows["curves"]).to_pandas()
     df["kind"] = _BIFURCATION_KINDS[df["kind"].to_numpy()]
-    return df
+    if not points:
+        return df
+    pts = Table(rows["points"]).to_pandas()
+    pts["kind"] = _POINT_KINDS[pts["kind"].to_numpy()]
+    return df, pts
 
 
 #: ``kind`` values of the bifurcation data, by the code the native module uses.
