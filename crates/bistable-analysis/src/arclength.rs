@@ -80,8 +80,10 @@ impl ArcOptions {
 }
 
 /// Residual, Jacobian `[M − I | ∂P/∂Ω]`, monodromy, impacts and sticking at `u`.
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Eval {
-    g: [f64; 2],
+    /// Residual `P(y) − y` (units of `Δx`, `ω0·Δx`).
+    pub(crate) g: [f64; 2],
     jac: [[f64; 3]; 2],
     /// Monodromy matrix `M` (0 once the mass sticks).
     pub(crate) m: [[f64; 2]; 2],

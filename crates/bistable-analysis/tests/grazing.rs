@@ -1,0 +1,81 @@
+//! Acceptance check of issue 22 for grazing: a grazing point on the P-1 branch at V = 0.05
+//! located to `GRAZING_TOL` in Ω, the pseudo-arclength branch passing through it (orbits with
+//! either impact count on it), and direct simulations on both sides of it.
+//!
+//! The point (Ω ≈ 0.8407977) is a grazing corner: the stable one-impact P-1 orbit's low flight
+//! touches the plate there and the branch turns back as the unstable two-impact orbit, so
+//! both orbits exist only above it. A simulation started on the one-impact orbit's fixed point
+//! therefore keeps one impact per shaker period at Ω = Ω_g + 1e-6 and falls to another
+//! attractor at Ω_g − 1e-6. The offset 1e-6 is 1e4 times the located error and far below the
+//! distance to the next change on the branch (the fold at Ω = 0.8758), so each side is the
+//! located point's.
+
+use bistable_analysis::bifurcations::{locate, Branch, Kind};
+use bistable_analysis::continuation::{continue_orbits, Curves, Method};
+use bistable_analysis::grazing::GRAZING_TOL;
+use bistable_analysis::parallel::Threads;
+use bistable_analysis::Model;
+use bistable_core::{Event, Params, SimError, Sinusoid, SolverOptions, Width};
+
+fn model(omega: f64) -> Model {
+    Model::new(
+        Params::paper(),
+        Sinusoid::new(omega, 0.05).unwrap(),
+        SolverOptions::default(),
+    )
+}
+
+/// Impacts per shaker period over `record` periods after `settle`, from `(x, x')` at phase 0.
+fn impacts_per_period(omega: f64, x: f64, v: f64, settle: u32, record: u32) -> f64 {
+    let m = model(omega);
+    let mut sim = m.simulator_from(x, v).unwrap();
+    let t = m.shaker_period();
+    sim.advance_to(f64::from(settle) * t, &mut |_: &Event| {})
+        .unwrap();
+    let before = sim.stats().impacts;
+    sim.advance_to(f64::from(settle + record) * t, &mut |_: &Event| {})
+        .unwrap();
+    (sim.stats().impacts - before) as f64 / f64::from(record)
+}
+
+#[test]
+fn grazing_corner_of_the_p1_branch_located_and_simulated() {
+    let models: Vec<Model> = (0..31).map(|i| model(0.8 + 0.005 * f64::from(i))).collect();
+    let threads = Threads::new(2).unwrap();
+    let curves = continue_orbits::<SimError>(
+        &models,
+        1,
+        2000,
+        Method::Arclength,
+        threads,
+        Width::preferred(),
+        &mut |_| Ok(()),
+    )
+    .unwrap();
+    let Curves::Arclength(traces) = curves else {
+        panic!("arclength continuation gives traces");
+    };
+    let branches = Branch::from_traces(&models[0], 1, &traces);
+    let found = locate::<SimError>(&branches, threads, &mut |_| Ok(())).unwrap();
+    let grazings: Vec<_> = found.iter().filter(|p| p.kind == Kind::Grazing).collect();
+    let [g] = grazings[..] else {
+        panic!("one grazing point expected: {found:#?}");
+    };
+    eprintln!(
+        "grazing at Ω = {:.13} ± {:e}: {g:?}",
+        g.omega, g.omega_error
+    );
+    assert!(g.omega_error <= GRAZING_TOL, "{g:?}");
+    assert!((0.84..0.842).contains(&g.omega), "{g:?}");
+    assert_eq!((g.impacts_before, g.impacts_after), (2, 1), "{g:?}");
+    // The branch goes on past the point with the new impact sequence.
+    let b = &branches[g.branch].points;
+    assert!(b[..=g.index].iter().all(|p| p.impacts == 2), "{b:?}");
+    assert!(b[g.index + 1..].iter().any(|p| p.impacts == 1), "{b:?}");
+    // Direct simulations from the one-impact orbit's fixed point at the point.
+    let above = impacts_per_period(g.omega + 1e-6, g.x0, g.v0, 2000, 200);
+    let below = impacts_per_period(g.omega - 1e-6, g.x0, g.v0, 2000, 200);
+    eprintln!("impacts per period: {above} above, {below} below");
+    assert_eq!(above, 1.0);
+    assert_ne!(below, 1.0);
+}
