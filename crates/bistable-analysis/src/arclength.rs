@@ -14,6 +14,7 @@ use bistable_core::shooting::eigenvalues;
 use bistable_core::{Event, SimError, Simulator, Sinusoid};
 
 use crate::cycles::record_cycles;
+use crate::grazing::crossing;
 use crate::orbit::Orbit;
 use crate::seeds::Seed;
 use crate::Model;
@@ -254,8 +255,12 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimEr
 
 /// Traces the branch through the orbit `(x0, v0)` at `Ω0` (`start = (Ω0, x0, v0)`, a fixed
 /// point of the map at `model`'s V) in the direction of increasing (`dir > 0`) or decreasing Ω,
-/// until Ω leaves the bounds, the step size collapses (a non-smooth point such as grazing, or a
-/// lost orbit) or `max_points`.
+/// until Ω leaves the bounds, the step size collapses (a lost orbit, or a non-smooth point the
+/// corrector cannot step over) or `max_points`. A step that changes the impacts per period
+/// (neither side sticking) passes through the grazing point between
+/// ([`crate::grazing::crossing`]): the orbits of both sides approaching it are added, and the
+/// trace goes on along the new side away from the point (at a grazing corner, back in Ω); if
+/// the point cannot be located to [`crate::grazing::CROSSING_TOL`], the step is kept as it is.
 pub fn trace(
     model: &Model,
     start: (f64, f64, f64),
@@ -271,6 +276,7 @@ pub fn trace(
         return Ok(Vec::new());
     };
     let mut out = vec![point(model, p, u, &e)?];
+    let mut side = (e.impacts, e.sticks);
     let ds_min = 1e-5 * o.ds_max;
     let mut ds = 0.25 * o.ds_max;
     while out.len() < o.max_points && ds >= ds_min {
@@ -282,9 +288,23 @@ pub fn trace(
             (step <= 2.0 * ds && dot(tn, t) > 0.5).then_some((un, e, it, tn))
         });
         match next {
-            Some((un, e, it, tn)) => {
+            Some((un, e, it, mut tn)) => {
+                // Impacts changed: the step crossed a grazing point (or jumped over its
+                // corner onto the other side). Follow both sides up to the point, then go on
+                // along the new side away from it.
+                let grazed = side != (e.impacts, e.sticks) && !side.1 && !e.sticks;
+                if let Some(c) = grazed
+                    .then(|| crossing(model, p, (u, side.0), (un, e.impacts)))
+                    .flatten()
+                {
+                    for s in &c.orbits {
+                        out.push(point(model, p, s.u, &s.eval)?);
+                    }
+                    tn = tangent(e.jac, None, un[2] - c.omega).unwrap_or(tn);
+                }
                 u = un;
                 t = tn;
+                side = (e.impacts, e.sticks);
                 out.push(point(model, p, u, &e)?);
                 if u[2] < o.omega_bounds.0 || u[2] > o.omega_bounds.1 {
                     break;
@@ -366,10 +386,12 @@ pub fn traces(
     Ok(traces)
 }
 
-/// Number of turning points of Ω (folds) along a trace.
+/// Number of turning points of Ω (folds) along a trace; a turn where the impacts per period
+/// change is a grazing corner, not a fold.
 pub fn folds(t: &[ArcPoint]) -> usize {
     t.windows(3)
         .filter(|w| (w[1].omega - w[0].omega) * (w[2].omega - w[1].omega) < 0.0)
+        .filter(|w| w[0].impacts == w[1].impacts && w[1].impacts == w[2].impacts)
         .count()
 }
 

@@ -35,7 +35,7 @@ use bistable_core::SimError;
 use crate::arclength::{correct, norm, period_map, ArcPoint};
 use crate::branches::Branches;
 use crate::cycles::record_cycles;
-use crate::grazing::{self, approach, Test, GRAZING_TOL};
+use crate::grazing::{approach, Test, GRAZING_TOL};
 use crate::orbit::Orbit;
 use crate::parallel::{self, Threads};
 use crate::progress::{OnProgress, Progress, Stage};
@@ -412,36 +412,32 @@ pub fn between(
     let mut pieces = vec![(sa, sb)];
     let mut out = Vec::new();
     if sa.side() != sb.side() {
-        if let Some(g) = grazing_point(model, period, &sa, &sb) {
-            let at = if g.on_a { &g.a_end } else { &g.b_end };
-            let p = BifurcationPoint {
-                omega: g.omega,
-                ..point(Kind::Grazing, at, g.error, &sa, &sb)
-            };
-            out.push((0.5 * (sa.s + sb.s), p));
-            pieces = vec![(sa, g.a_end), (g.b_end, sb)];
+        let (lo, hi) = chord.bisect(sa, sb);
+        let kind = if lo.sticks != hi.sticks {
+            Kind::Sticking
         } else {
-            let (lo, hi) = chord.bisect(sa, sb);
-            let kind = if lo.sticks != hi.sticks {
-                Kind::Sticking
-            } else {
-                Kind::Grazing
-            };
-            let mid = Solved {
-                u: [0, 1, 2].map(|k| 0.5 * (lo.u[k] + hi.u[k])),
-                ..lo
-            };
-            // The change lies on the branch between the bracket's orbits, so Ω is known to
-            // their distance (also where Ω hardly differs: the branch can turn at a grazing
-            // corner).
-            let err = (hi.u[2] - lo.u[2]).abs().max(dist(&lo, &hi));
-            let p = BifurcationPoint {
+            Kind::Grazing
+        };
+        let mid = Solved {
+            u: [0, 1, 2].map(|k| 0.5 * (lo.u[k] + hi.u[k])),
+            ..lo
+        };
+        // The change lies on the branch between the bracket's orbits, so Ω is known to their
+        // distance (also where Ω hardly differs: the branch can turn at a grazing corner).
+        let err = (hi.u[2] - lo.u[2]).abs().max(dist(&lo, &hi));
+        let p = match grazing_point(model, period, &sa, &sb) {
+            // Located by its test functions, where they did better than the bisection.
+            Some(g) if kind == Kind::Grazing && g.error < err => BifurcationPoint {
+                omega: g.omega,
+                ..point(kind, &g.at, g.error, &lo, &hi)
+            },
+            _ => BifurcationPoint {
                 omega: mid.u[2],
                 ..point(kind, &lo, err, &lo, &hi)
-            };
-            out.push((mid.s, p));
-            pieces = vec![(sa, lo), (hi, sb)];
-        }
+            },
+        };
+        out.push((mid.s, p));
+        pieces = vec![(sa, lo), (hi, sb)];
     }
     for (lo, hi) in pieces {
         if lo.side() != hi.side() {
@@ -468,70 +464,54 @@ pub fn between(
         .collect()
 }
 
-/// A grazing point between orbits `a` and `b` of a branch, approached from both.
+/// A grazing point between orbits `a` and `b` of a branch.
 struct Grazed {
     /// `Ω` at the point.
     omega: f64,
     /// Bound on its error (the final bracket of the approach it comes from).
     error: f64,
-    /// It comes from the approach on `a`'s side (else `b`'s).
-    on_a: bool,
-    /// The orbit of `a`'s side nearest the point (`a` itself if that approach failed).
-    a_end: Solved,
-    /// ... and of `b`'s side.
-    b_end: Solved,
+    /// The orbit of that approach nearest the point.
+    at: Solved,
 }
 
 /// The grazing point between `a` and `b` (different impacts, neither sticks), approached
 /// along each side at fixed Ω ([`grazing::approach`]: the minimum gap on the side with
-/// fewer impacts, the impact speed on the other). The point is that side's estimate, or the
-/// other's when it has the smaller error. `None` when neither approach succeeds.
+/// fewer impacts, the impact speed on the other): the minimum-gap side's estimate while it
+/// converged to [`GRAZING_TOL`] or has the smaller error, else the other's. `None` when
+/// neither approach succeeds.
 fn grazing_point(model: &Model, period: u32, a: &Solved, b: &Solved) -> Option<Grazed> {
     if a.sticks || b.sticks {
         return None;
     }
-    let test = |p: &Solved, q: &Solved| {
-        if p.impacts < q.impacts {
-            Test::Gap
-        } else {
-            Test::Speed
-        }
+    let (few, many) = if a.impacts < b.impacts {
+        (a, b)
+    } else {
+        (b, a)
     };
-    let from = |p: &Solved, q: &Solved| approach(model, period, p.u, test(p, q));
-    let (ga, gb) = (from(a, b), from(b, a));
-    let end =
-        |g: &Option<grazing::Approach>, p: &Solved| match g.as_ref().and_then(|g| g.path.last()) {
-            Some(n) => Solved {
-                s: 0.5 * (a.s + b.s),
-                u: n.u,
-                multipliers: n.multipliers(),
-                impacts: n.eval.impacts,
-                sticks: n.eval.sticks,
-            },
-            None => *p,
-        };
-    let (a_end, b_end) = (end(&ga, a), end(&gb, b));
-    // Prefer the minimum gap's side while it converged.
-    let a_first = test(a, b) == Test::Gap;
-    let pick = match (&ga, &gb) {
-        (Some(x), Some(y)) => {
-            let x_wins = if a_first {
-                x.error <= GRAZING_TOL || x.error <= y.error
+    let gap = approach(model, period, few.u, Test::Gap);
+    let speed = approach(model, period, many.u, Test::Speed);
+    let g = match (gap, speed) {
+        (Some(g), Some(s)) => {
+            if g.error <= GRAZING_TOL || g.error <= s.error {
+                g
             } else {
-                !(y.error <= GRAZING_TOL || y.error <= x.error)
-            };
-            Some((x_wins, if x_wins { x } else { y }))
+                s
+            }
         }
-        (Some(x), None) => Some((true, x)),
-        (None, Some(y)) => Some((false, y)),
-        (None, None) => None,
-    }?;
+        (Some(g), None) => g,
+        (None, s) => s?,
+    };
+    let n = g.path.last()?;
     Some(Grazed {
-        omega: pick.1.omega,
-        error: pick.1.error,
-        on_a: pick.0,
-        a_end,
-        b_end,
+        omega: g.omega,
+        error: g.error,
+        at: Solved {
+            s: 0.5 * (a.s + b.s),
+            u: n.u,
+            multipliers: n.multipliers(),
+            impacts: n.eval.impacts,
+            sticks: n.eval.sticks,
+        },
     })
 }
 

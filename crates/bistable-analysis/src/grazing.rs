@@ -277,16 +277,68 @@ pub(crate) fn approach(
         (None, None) => 2.0 * (a.u[2] - root).abs(),
     }
     .max(if floor.is_finite() { floor } else { 0.0 });
-    let toward = (root - u0[2]).signum();
-    let mut path: Vec<Solved> = solved
-        .into_iter()
-        .filter(|s| (s.u[2] - u0[2]) * toward >= 0.0)
-        .collect();
-    path.sort_by(|p, q| ((p.u[2] - u0[2]) * toward).total_cmp(&((q.u[2] - u0[2]) * toward)));
+    // From the start towards the point: the orbits no farther from it than the start, the
+    // farthest first (the start stays first among equals).
+    let from_root = |s: &Solved| (s.u[2] - root).abs();
+    let d0 = (u0[2] - root).abs();
+    let mut path: Vec<Solved> = solved.into_iter().filter(|s| from_root(s) <= d0).collect();
+    path.sort_by(|p, q| from_root(q).total_cmp(&from_root(p)));
     Some(Approach {
         path,
         omega: root,
         error,
+    })
+}
+
+/// Largest error in Ω of the minimum-gap side's approach for a continuation to pass through
+/// the grazing point it located.
+pub const CROSSING_TOL: f64 = 1e-8;
+
+/// The impact-speed side's approach must end this fraction of its start's distance (in Ω)
+/// from the point for a continuation to pass through it.
+const SPEED_REACH: f64 = 0.01;
+
+/// A branch continued through a grazing point.
+#[derive(Debug, Clone)]
+pub(crate) struct Crossing {
+    /// `Ω` at the point (from the minimum-gap side).
+    pub(crate) omega: f64,
+    /// The orbits from the first side's towards the point, then the second side's away from
+    /// it (neither end orbit).
+    pub(crate) orbits: Vec<Solved>,
+}
+
+/// The way from orbit `a` (`(x, x', Ω)`, `impacts_a` per period) through the grazing point to
+/// orbit `b` of the same branch (`impacts_b ≠ impacts_a`, neither sticks): both sides
+/// approached ([`approach`]). `None` unless the minimum-gap side located the point to
+/// [`CROSSING_TOL`] and the impact-speed side came within [`SPEED_REACH`] of its start's
+/// distance to it (short of that its corrector failed, or the side has a fold between, which
+/// an approach at fixed Ω cannot pass).
+pub(crate) fn crossing(
+    model: &Model,
+    period: u32,
+    a: ([f64; 3], u64),
+    b: ([f64; 3], u64),
+) -> Option<Crossing> {
+    let test = |p: u64, q: u64| if p < q { Test::Gap } else { Test::Speed };
+    let ga = approach(model, period, a.0, test(a.1, b.1))?;
+    let gb = approach(model, period, b.0, test(b.1, a.1))?;
+    let (gap, speed) = if a.1 < b.1 { (&ga, &gb) } else { (&gb, &ga) };
+    if gap.error.is_nan() || gap.error > CROSSING_TOL {
+        return None;
+    }
+    // The impact-speed side must have come at least 99 % of the way to the point (not stalled
+    // where its corrector failed, nor walked off to a fold of its side).
+    let to_point = |s: &Solved| (s.u[2] - gap.omega).abs();
+    let (first, last) = (&speed.path[0], speed.path.last()?);
+    if to_point(last) > SPEED_REACH * to_point(first) {
+        return None;
+    }
+    let mut orbits: Vec<Solved> = ga.path[1..].to_vec();
+    orbits.extend(gb.path[1..].iter().rev());
+    Some(Crossing {
+        omega: gap.omega,
+        orbits,
     })
 }
 

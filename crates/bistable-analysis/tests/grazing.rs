@@ -12,7 +12,7 @@
 
 use bistable_analysis::bifurcations::{locate, Branch, Kind};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
-use bistable_analysis::grazing::GRAZING_TOL;
+use bistable_analysis::grazing::{CROSSING_TOL, GRAZING_TOL};
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::Model;
 use bistable_core::{Event, Params, SimError, Sinusoid, SolverOptions, Width};
@@ -68,10 +68,21 @@ fn grazing_corner_of_the_p1_branch_located_and_simulated() {
     assert!(g.omega_error <= GRAZING_TOL, "{g:?}");
     assert!((0.84..0.842).contains(&g.omega), "{g:?}");
     assert_eq!((g.impacts_before, g.impacts_after), (2, 1), "{g:?}");
-    // The branch goes on past the point with the new impact sequence.
+    // The branch passes through the point: two-impact orbits up to it, one-impact orbits
+    // from it, both only above it (a corner), the one-impact side approached to
+    // `CROSSING_TOL` and followed on up to the end of the grid.
     let b = &branches[g.branch].points;
-    assert!(b[..=g.index].iter().all(|p| p.impacts == 2), "{b:?}");
-    assert!(b[g.index + 1..].iter().any(|p| p.impacts == 1), "{b:?}");
+    let (before, after) = (&b[..=g.index], &b[g.index + 1..]);
+    assert!(
+        before.iter().rev().take(10).all(|p| p.impacts == 2),
+        "{before:?}"
+    );
+    assert!(after.iter().all(|p| p.impacts == 1), "{after:?}");
+    let mut near = before.iter().rev().take(10).chain(after.iter().take(10));
+    assert!(near.all(|p| p.omega >= g.omega - g.omega_error), "{b:?}");
+    assert!(after[0].omega - g.omega <= CROSSING_TOL, "{:?}", after[0]);
+    assert!(before.last().unwrap().omega - g.omega <= 1e-3, "{before:?}");
+    assert!(after.last().unwrap().omega >= 0.95, "{:?}", after.last());
     // Direct simulations from the one-impact orbit's fixed point at the point.
     let above = impacts_per_period(g.omega + 1e-6, g.x0, g.v0, 2000, 200);
     let below = impacts_per_period(g.omega - 1e-6, g.x0, g.v0, 2000, 200);
