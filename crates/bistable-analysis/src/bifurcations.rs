@@ -12,7 +12,11 @@
 //!   (re-solving the orbit at each trial); the test functions below jump there, so they are
 //!   only used on the smooth pieces on either side of the bracket. Near a grazing corner the
 //!   impacting side's multipliers grow without bound and the corrector may stop converging:
-//!   the bracket then stays wider, and the reported error says so. The impact counts of
+//!   the bracket then stays wider. A grazing point is therefore also approached along each
+//!   side at fixed Ω by its own smooth test function ([`crate::grazing`]: the minimum gap of
+//!   the flight that comes to touch, or the new impact's speed), which locates it to
+//!   [`GRAZING_TOL`] even at a corner, where the point lies outside the chord's Ω range; the
+//!   point reported is the one with the smaller error. The impact counts of
 //!   orbits that stick on both sides are not compared (the chatter before sticking is
 //!   truncated by the chatter rule, so its count is no grazing).
 //! * on each smooth piece, a sign change of a test function of the monodromy matrix `M` is
@@ -169,8 +173,10 @@ pub struct BifurcationPoint {
     pub velocity: f64,
     /// Period of the branch's orbits in shaker periods.
     pub period: u32,
-    /// Fixed point `x` at plate phase 0 of the orbit at the point (grazing, sticking: the
-    /// orbit at the end of the final bracket on the side of `before`).
+    /// Fixed point `x` at plate phase 0 of the orbit at the point (grazing: the solved orbit
+    /// nearest it on the side it was approached from, normally the one with fewer impacts,
+    /// or after a bisection, as for sticking: the orbit at the end of the final bracket on the
+    /// side of `before`).
     pub x0: f64,
     /// Its velocity `x'`.
     pub v0: f64,
@@ -180,9 +186,10 @@ pub struct BifurcationPoint {
     /// period; NaN if its simulation failed).
     pub max_x: f64,
     /// Bound on the error of `omega`: the distance in `(x, x', Ω)` of the final bracket's
-    /// orbits (smooth kinds: regula falsi, at most [`SMOOTH_TOL`] when it converged; grazing
-    /// and sticking: bisection, at most [`NONSMOOTH_TOL`] when it converged, larger where the
-    /// corrector stopped converging near a grazing corner).
+    /// orbits (smooth kinds: regula falsi, at most [`SMOOTH_TOL`] when it converged; sticking:
+    /// bisection, at most [`NONSMOOTH_TOL`] when it converged; grazing: the final bracket in Ω
+    /// of the test function's approach, at most [`GRAZING_TOL`] when it converged, or the
+    /// bisection's where that is smaller).
     pub omega_error: f64,
     /// Which branch of the caller's list the point is on.
     pub branch: usize,
