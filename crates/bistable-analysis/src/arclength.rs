@@ -257,10 +257,11 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimEr
 /// point of the map at `model`'s V) in the direction of increasing (`dir > 0`) or decreasing Ω,
 /// until Ω leaves the bounds, the step size collapses (a lost orbit, or a non-smooth point the
 /// corrector cannot step over) or `max_points`. A step that changes the impacts per period
-/// (neither side sticking) passes through the grazing point between
-/// ([`crate::grazing::crossing`]): the orbits of both sides approaching it are added, and the
-/// trace goes on along the new side away from the point (at a grazing corner, back in Ω); if
-/// the point cannot be located to [`crate::grazing::CROSSING_TOL`], the step is kept as it is.
+/// (neither side sticking) passes through the grazing point between (both sides approached
+/// as in [`crate::grazing`]): the orbits of both sides are added, and the trace goes on along
+/// the new side away from the point (at a grazing corner, back in Ω); if the point cannot be
+/// located to [`crate::grazing::CROSSING_TOL`] or the impacting side's approach stops short
+/// of it, the step is kept as it is.
 pub fn trace(
     model: &Model,
     start: (f64, f64, f64),
