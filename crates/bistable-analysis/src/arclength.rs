@@ -437,6 +437,11 @@ mod tests {
         };
         let t: Vec<ArcPoint> = [1.0, 1.2, 1.1, 1.0, 1.3].map(at).to_vec();
         assert_eq!(folds(&t), 2);
+        // A turn where the impacts per period change is a grazing corner.
+        let mut corner = t.clone();
+        corner[2].impacts = 2;
+        corner[3].impacts = 2;
+        assert_eq!(folds(&corner), 0);
         assert!(covers(&t, 1.15, 0.0, 0.0, 1e-9) && !covers(&t, 1.4, 0.0, 0.0, 1e-9));
     }
 }
