@@ -21,6 +21,9 @@ use crate::Model;
 
 /// Samples per shaker period for the largest displacement of a traced orbit.
 const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
+/// A step that changes the impacts per period where the grazing point between cannot be
+/// passed is kept only once it is at most this fraction of the largest step.
+const JUMP_STEP: f64 = 1e-3;
 /// A seeded orbit within this distance (max norm in `x`, `x'`) of a trace is already on it.
 const COVERED: f64 = 5e-3;
 
@@ -261,7 +264,8 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimEr
 /// as in [`crate::grazing`]): the orbits of both sides are added, and the trace goes on along
 /// the new side away from the point (at a grazing corner, back in Ω); if the point cannot be
 /// located to [`crate::grazing::CROSSING_TOL`] or the impacting side's approach stops short
-/// of it, the step is kept as it is.
+/// of it, the step is halved and retried (the side may fold first), and kept as it is once
+/// shorter than [`JUMP_STEP`] of the largest step.
 pub fn trace(
     model: &Model,
     start: (f64, f64, f64),
@@ -294,14 +298,23 @@ pub fn trace(
                 // corner onto the other side). Follow both sides up to the point, then go on
                 // along the new side away from it.
                 let grazed = side != (e.impacts, e.sticks) && !side.1 && !e.sticks;
-                if let Some(c) = grazed
+                match grazed
                     .then(|| crossing(model, p, (u, side.0), (un, e.impacts)))
                     .flatten()
                 {
-                    for s in &c.orbits {
-                        out.push(point(model, p, s.u, &s.eval)?);
+                    Some(c) => {
+                        for s in &c.orbits {
+                            out.push(point(model, p, s.u, &s.eval)?);
+                        }
+                        tn = tangent(e.jac, None, un[2] - c.omega).unwrap_or(tn);
                     }
-                    tn = tangent(e.jac, None, un[2] - c.omega).unwrap_or(tn);
+                    // Not passable from here: shorter steps along this side first (it may
+                    // fold before the point), the jump only once they are short.
+                    None if grazed && ds > JUMP_STEP * o.ds_max => {
+                        ds *= 0.5;
+                        continue;
+                    }
+                    None => {}
                 }
                 u = un;
                 t = tn;
