@@ -265,7 +265,7 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimEr
 /// the new side away from the point (at a grazing corner, back in Ω); if the point cannot be
 /// located to [`crate::grazing::CROSSING_TOL`] or the impacting side's approach stops short
 /// of it, the step is halved and retried (the side may fold first), and kept as it is once
-/// shorter than [`JUMP_STEP`] of the largest step.
+/// shorter than 1e-3 of the largest step.
 pub fn trace(
     model: &Model,
     start: (f64, f64, f64),
