@@ -14,12 +14,16 @@ use bistable_core::shooting::eigenvalues;
 use bistable_core::{Event, SimError, Simulator, Sinusoid};
 
 use crate::cycles::record_cycles;
+use crate::grazing::crossing;
 use crate::orbit::Orbit;
 use crate::seeds::Seed;
 use crate::Model;
 
 /// Samples per shaker period for the largest displacement of a traced orbit.
 const SAMPLES: NonZeroU32 = NonZeroU32::new(128).expect("128 > 0");
+/// A step that changes the impacts per period where the grazing point between cannot be
+/// passed is kept only once it is at most this fraction of the largest step.
+const JUMP_STEP: f64 = 1e-3;
 /// A seeded orbit within this distance (max norm in `x`, `x'`) of a trace is already on it.
 const COVERED: f64 = 5e-3;
 
@@ -80,8 +84,10 @@ impl ArcOptions {
 }
 
 /// Residual, Jacobian `[M − I | ∂P/∂Ω]`, monodromy, impacts and sticking at `u`.
+#[derive(Debug, Clone, Copy)]
 pub(crate) struct Eval {
-    g: [f64; 2],
+    /// Residual `P(y) − y` (units of `Δx`, `ω0·Δx`).
+    pub(crate) g: [f64; 2],
     jac: [[f64; 3]; 2],
     /// Monodromy matrix `M` (0 once the mass sticks).
     pub(crate) m: [[f64; 2]; 2],
@@ -252,8 +258,14 @@ fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimEr
 
 /// Traces the branch through the orbit `(x0, v0)` at `Ω0` (`start = (Ω0, x0, v0)`, a fixed
 /// point of the map at `model`'s V) in the direction of increasing (`dir > 0`) or decreasing Ω,
-/// until Ω leaves the bounds, the step size collapses (a non-smooth point such as grazing, or a
-/// lost orbit) or `max_points`.
+/// until Ω leaves the bounds, the step size collapses (a lost orbit, or a non-smooth point the
+/// corrector cannot step over) or `max_points`. A step that changes the impacts per period
+/// (neither side sticking) passes through the grazing point between (both sides approached
+/// as in [`crate::grazing`]): the orbits of both sides are added, and the trace goes on along
+/// the new side away from the point (at a grazing corner, back in Ω); if the point cannot be
+/// located to [`crate::grazing::CROSSING_TOL`] or the impacting side's approach stops short
+/// of it, the step is halved and retried (the side may fold first), and kept as it is once
+/// shorter than 1e-3 of the largest step.
 pub fn trace(
     model: &Model,
     start: (f64, f64, f64),
@@ -269,6 +281,7 @@ pub fn trace(
         return Ok(Vec::new());
     };
     let mut out = vec![point(model, p, u, &e)?];
+    let mut side = (e.impacts, e.sticks);
     let ds_min = 1e-5 * o.ds_max;
     let mut ds = 0.25 * o.ds_max;
     while out.len() < o.max_points && ds >= ds_min {
@@ -280,9 +293,32 @@ pub fn trace(
             (step <= 2.0 * ds && dot(tn, t) > 0.5).then_some((un, e, it, tn))
         });
         match next {
-            Some((un, e, it, tn)) => {
+            Some((un, e, it, mut tn)) => {
+                // Impacts changed: the step crossed a grazing point (or jumped over its
+                // corner onto the other side). Follow both sides up to the point, then go on
+                // along the new side away from it.
+                let grazed = side != (e.impacts, e.sticks) && !side.1 && !e.sticks;
+                match grazed
+                    .then(|| crossing(model, p, (u, side.0), (un, e.impacts)))
+                    .flatten()
+                {
+                    Some(c) => {
+                        for s in &c.orbits {
+                            out.push(point(model, p, s.u, &s.eval)?);
+                        }
+                        tn = tangent(e.jac, None, un[2] - c.omega).unwrap_or(tn);
+                    }
+                    // Not passable from here: shorter steps along this side first (it may
+                    // fold before the point), the jump only once they are short.
+                    None if grazed && ds > JUMP_STEP * o.ds_max => {
+                        ds *= 0.5;
+                        continue;
+                    }
+                    None => {}
+                }
                 u = un;
                 t = tn;
+                side = (e.impacts, e.sticks);
                 out.push(point(model, p, u, &e)?);
                 if u[2] < o.omega_bounds.0 || u[2] > o.omega_bounds.1 {
                     break;
@@ -364,10 +400,12 @@ pub fn traces(
     Ok(traces)
 }
 
-/// Number of turning points of Ω (folds) along a trace.
+/// Number of turning points of Ω (folds) along a trace; a turn where the impacts per period
+/// change is a grazing corner, not a fold.
 pub fn folds(t: &[ArcPoint]) -> usize {
     t.windows(3)
         .filter(|w| (w[1].omega - w[0].omega) * (w[2].omega - w[1].omega) < 0.0)
+        .filter(|w| w[0].impacts == w[1].impacts && w[1].impacts == w[2].impacts)
         .count()
 }
 
@@ -412,6 +450,11 @@ mod tests {
         };
         let t: Vec<ArcPoint> = [1.0, 1.2, 1.1, 1.0, 1.3].map(at).to_vec();
         assert_eq!(folds(&t), 2);
+        // A turn where the impacts per period change is a grazing corner.
+        let mut corner = t.clone();
+        corner[2].impacts = 2;
+        corner[3].impacts = 2;
+        assert_eq!(folds(&corner), 0);
         assert!(covers(&t, 1.15, 0.0, 0.0, 1e-9) && !covers(&t, 1.4, 0.0, 0.0, 1e-9));
     }
 }

@@ -12,7 +12,11 @@
 //!   (re-solving the orbit at each trial); the test functions below jump there, so they are
 //!   only used on the smooth pieces on either side of the bracket. Near a grazing corner the
 //!   impacting side's multipliers grow without bound and the corrector may stop converging:
-//!   the bracket then stays wider, and the reported error says so. The impact counts of
+//!   the bracket then stays wider. A grazing point is therefore also approached along each
+//!   side at fixed Ω by its own smooth test function ([`crate::grazing`]: the minimum gap of
+//!   the flight that comes to touch, or the new impact's speed), which locates it to
+//!   [`GRAZING_TOL`] even at a corner, where the point lies outside the chord's Ω range; the
+//!   point reported is the one with the smaller error. The impact counts of
 //!   orbits that stick on both sides are not compared (the chatter before sticking is
 //!   truncated by the chatter rule, so its count is no grazing).
 //! * on each smooth piece, a sign change of a test function of the monodromy matrix `M` is
@@ -35,6 +39,7 @@ use bistable_core::SimError;
 use crate::arclength::{correct, norm, period_map, ArcPoint};
 use crate::branches::Branches;
 use crate::cycles::record_cycles;
+use crate::grazing::{approach, Test, GRAZING_TOL};
 use crate::orbit::Orbit;
 use crate::parallel::{self, Threads};
 use crate::progress::{OnProgress, Progress, Stage};
@@ -168,8 +173,10 @@ pub struct BifurcationPoint {
     pub velocity: f64,
     /// Period of the branch's orbits in shaker periods.
     pub period: u32,
-    /// Fixed point `x` at plate phase 0 of the orbit at the point (grazing, sticking: the
-    /// orbit at the end of the final bracket on the side of `before`).
+    /// Fixed point `x` at plate phase 0 of the orbit at the point (grazing: the solved orbit
+    /// nearest it on the side it was approached from, normally the one with fewer impacts,
+    /// or after a bisection, as for sticking: the orbit at the end of the final bracket on the
+    /// side of `before`).
     pub x0: f64,
     /// Its velocity `x'`.
     pub v0: f64,
@@ -179,9 +186,10 @@ pub struct BifurcationPoint {
     /// period; NaN if its simulation failed).
     pub max_x: f64,
     /// Bound on the error of `omega`: the distance in `(x, x', Ω)` of the final bracket's
-    /// orbits (smooth kinds: regula falsi, at most [`SMOOTH_TOL`] when it converged; grazing
-    /// and sticking: bisection, at most [`NONSMOOTH_TOL`] when it converged, larger where the
-    /// corrector stopped converging near a grazing corner).
+    /// orbits (smooth kinds: regula falsi, at most [`SMOOTH_TOL`] when it converged; sticking:
+    /// bisection, at most [`NONSMOOTH_TOL`] when it converged; grazing: the final bracket in Ω
+    /// of the test function's approach, at most [`GRAZING_TOL`] when it converged, or the
+    /// bisection's where that is smaller).
     pub omega_error: f64,
     /// Which branch of the caller's list the point is on.
     pub branch: usize,
@@ -424,9 +432,16 @@ pub fn between(
         // The change lies on the branch between the bracket's orbits, so Ω is known to their
         // distance (also where Ω hardly differs: the branch can turn at a grazing corner).
         let err = (hi.u[2] - lo.u[2]).abs().max(dist(&lo, &hi));
-        let p = BifurcationPoint {
-            omega: mid.u[2],
-            ..point(kind, &lo, err, &lo, &hi)
+        let p = match grazing_point(model, period, &sa, &sb) {
+            // Located by its test functions, where they did better than the bisection.
+            Some(g) if kind == Kind::Grazing && g.error < err => BifurcationPoint {
+                omega: g.omega,
+                ..point(kind, &g.at, g.error, &lo, &hi)
+            },
+            _ => BifurcationPoint {
+                omega: mid.u[2],
+                ..point(kind, &lo, err, &lo, &hi)
+            },
         };
         out.push((mid.s, p));
         pieces = vec![(sa, lo), (hi, sb)];
@@ -454,6 +469,57 @@ pub fn between(
             p
         })
         .collect()
+}
+
+/// A grazing point between orbits `a` and `b` of a branch.
+struct Grazed {
+    /// `Ω` at the point.
+    omega: f64,
+    /// Bound on its error (the final bracket of the approach it comes from).
+    error: f64,
+    /// The orbit of that approach nearest the point.
+    at: Solved,
+}
+
+/// The grazing point between `a` and `b` (different impacts, neither sticks), approached
+/// along each side at fixed Ω ([`grazing::approach`]: the minimum gap on the side with
+/// fewer impacts, the impact speed on the other): the minimum-gap side's estimate while it
+/// converged to [`GRAZING_TOL`] or has the smaller error, else the other's. `None` when
+/// neither approach succeeds.
+fn grazing_point(model: &Model, period: u32, a: &Solved, b: &Solved) -> Option<Grazed> {
+    if a.sticks || b.sticks {
+        return None;
+    }
+    let (few, many) = if a.impacts < b.impacts {
+        (a, b)
+    } else {
+        (b, a)
+    };
+    let gap = approach(model, period, few.u, Test::Gap);
+    let speed = approach(model, period, many.u, Test::Speed);
+    let g = match (gap, speed) {
+        (Some(g), Some(s)) => {
+            if g.error <= GRAZING_TOL || g.error <= s.error {
+                g
+            } else {
+                s
+            }
+        }
+        (Some(g), None) => g,
+        (None, s) => s?,
+    };
+    let n = g.path.last()?;
+    Some(Grazed {
+        omega: g.omega,
+        error: g.error,
+        at: Solved {
+            s: 0.5 * (a.s + b.s),
+            u: n.u,
+            multipliers: n.multipliers(),
+            impacts: n.eval.impacts,
+            sticks: n.eval.sticks,
+        },
+    })
 }
 
 /// Largest displacement on the `period`-periodic orbit through `(x, x')` at `Ω` (`u`).

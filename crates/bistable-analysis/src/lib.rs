@@ -34,6 +34,7 @@ pub mod cycles;
 pub mod energy;
 pub mod ensemble;
 pub mod event_log;
+pub mod grazing;
 pub mod grid;
 pub mod model;
 pub mod orbit;

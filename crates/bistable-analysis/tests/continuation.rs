@@ -1,5 +1,6 @@
 //! Pseudo-arclength continuation over the paper's low-Ω range at V = 0.03, where a 3-impact and
-//! a 2-impact branch meet at a grazing contact: every traced stretch of a branch appears once.
+//! a 2-impact branch meet at a grazing corner: the branch is traced through it, and every
+//! traced stretch of a branch appears once.
 
 use bistable_analysis::arclength::covers;
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
@@ -35,10 +36,16 @@ fn no_trace_runs_along_an_earlier_one() {
     let Curves::Arclength(traces) = curves else {
         panic!("arclength continuation gives traces");
     };
-    assert!(traces.len() >= 2, "{} traces", traces.len());
-    // Both impact counts of the grazing corner are on some trace.
-    let impacts: Vec<u64> = traces.iter().flatten().map(|p| p.impacts).collect();
-    assert!(impacts.contains(&3) && impacts.contains(&2), "{impacts:?}");
+    // Both impact counts of the grazing corner are on one trace: it passes through the corner
+    // (before continuation through grazing, the corner split the branch into two traces).
+    assert!(
+        traces.iter().any(|t| {
+            let impacts: Vec<u64> = t.iter().map(|p| p.impacts).collect();
+            impacts.contains(&3) && impacts.contains(&2)
+        }),
+        "no trace through the corner: {} traces",
+        traces.len()
+    );
     for (k, t) in traces.iter().enumerate() {
         for earlier in &traces[..k] {
             // A later trace may touch an earlier one at its ends (where it joined it), no more.

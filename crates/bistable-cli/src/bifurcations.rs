@@ -33,13 +33,16 @@ kind: fold (a Floquet multiplier through +1), period_doubling (through −1),
 neimark_sacker (a complex pair through the unit circle), grazing (the impacts
 per period change), sticking (the orbit starts or stops sticking). Smooth kinds
 are located by regula falsi on det(M − I), det(M + I) or det M − 1 along the
-branch (re-solving the orbit by shooting at each trial), grazing and sticking by
-bisection on the impact count; omega_error bounds the error of omega (the final
-bracket's length in (x, x', Ω): at most 1e-12 and 1e-10 when converged; more at
-a grazing corner the corrector cannot approach). Impact counts of orbits that
+branch (re-solving the orbit by shooting at each trial), sticking by bisection,
+grazing by secant steps at fixed Ω on the minimum gap of the flight that comes
+to touch (side with fewer impacts) or the lowest impact speed (other side),
+bisection on the impact count where both fail; omega_error bounds the error of
+omega (at most 1e-12 for smooth kinds and 1e-10 for grazing and sticking when
+converged; more where the iteration stalled). Impact counts of orbits that
 stick on both sides are not compared (the chatter before sticking is truncated).
-x0, v0, max_x and the multipliers are those of the orbit at the point (grazing,
-sticking: on the side of orbit index); the point lies between orbits index and
+x0, v0, max_x and the multipliers are those of the orbit at the point (grazing:
+the solved orbit nearest it, normally on the side with fewer impacts; sticking:
+on the side of orbit index); the point lies between orbits index and
 index + 1 of branch (a trace of the --arclength CSV, or a polyline of the
 natural continuation); impacts_before/after and sticks_before/after are those
 of the orbits on either side. Natural continuation stops at a fold, so folds

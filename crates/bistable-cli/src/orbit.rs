@@ -44,12 +44,16 @@ orbit found is continued from point to point in both directions, so unstable
 parts are followed past period doublings. Folds end such a branch (natural
 continuation cannot turn around); with --arclength the branches are followed
 through folds by pseudo-arclength continuation (unknowns x, x', Ω; tangent from
-[M − I | ∂P/∂Ω]), which shows the unstable middle branch of a hysteresis loop.
+[M − I | ∂P/∂Ω]), which shows the unstable middle branch of a hysteresis loop,
+and through grazing points: a step that changes the impacts per period
+approaches the grazing point from both sides and goes on along the new side.
 --plot draws the largest displacement of the orbits against Ω: stable thick and
 solid, unstable thin and dashed.
 
-Bifurcation points: between consecutive orbits of every branch, a change of the
-impacts per period (grazing) or of sticking is located by bisection, and a sign
+Bifurcation points: between consecutive orbits of every branch, a change of
+sticking is located by bisection, a change of the impacts per period (grazing)
+by driving the grazing flight's minimum gap (or the new impact's speed) to zero
+at fixed Ω (Ω to 1e-10; bisection where that fails), and a sign
 change of det(M − I) (fold), det(M + I) (period doubling) or det M − 1 with a
 complex pair (Neimark–Sacker) by regula falsi along the branch, re-solving the
 orbit by shooting at each trial (Ω to 1e-12 where the test function is smooth).
