@@ -103,7 +103,7 @@ def test_readme_cli_examples_run_with_small_sizes(cli, tmp_path):
 def test_docstring_examples():
     import bistable_impact as bi
 
-    modules = (bi, bi.sweep, bi.analyses)
+    modules = (bi, bi.sweep, bi.analyses, bi.cluster)
     for module in modules:
         result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         assert result.failed == 0, module.__name__
@@ -112,4 +112,4 @@ def test_docstring_examples():
         for m in modules
         for t in doctest.DocTestFinder().find(m)
     )
-    assert found >= 14
+    assert found >= 15

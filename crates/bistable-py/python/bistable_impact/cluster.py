@@ -3,20 +3,21 @@
 Dask's defaults suit interactive work with the dashboard: every process (scheduler, nannies,
 workers, client) checks its event loop every 20 ms, each worker samples its own stack every
 10 ms for the profiler, and system monitors poll CPU and memory twice a second. An idle
-2-worker :class:`distributed.LocalCluster` with those defaults uses about 0.12 CPU seconds per
+2-worker :class:`distributed.LocalCluster` with those defaults uses about 0.14 CPU seconds per
 wall second on this project's 2-core machine, which a sweep pays for as long as it runs (about
 10 % of a 60 × 40 map's CPU time). With :data:`LEAN_CONFIG` the same cluster uses about
-0.016 (``bench/python_map.py`` measures both).
+0.015 (``bench/python_map.py`` measures both; ``--dask-defaults`` for the defaults).
 
 Use :func:`local_cluster` on one machine; on other clusters put :data:`LEAN_CONFIG` in the
 workers' and the scheduler's Dask configuration (YAML or environment variables) if their
-upkeep matters. The settings change no result, only how often Dask looks at itself::
+upkeep matters. The settings change no result, only how often Dask looks at itself:
 
-    import bistable_impact as bi
-    from distributed import Client
-
-    with bi.cluster.local_cluster(n_workers=2) as cluster, Client(cluster) as client:
-        df = bi.sweep.map(bi.linspace(0.2, 3.5, 60), bi.linspace(0.005, 0.2, 40), client=client)
+>>> import bistable_impact as bi
+>>> from distributed import Client
+>>> with bi.cluster.local_cluster(n_workers=2) as cluster, Client(cluster) as client:
+...     df = bi.sweep.map([0.5, 1.0], [0.05, 0.1], client=client, max_periods=300.0)
+>>> len(df)
+4
 """
 
 from __future__ import annotations
