@@ -12,7 +12,7 @@ use bistable_analysis::twoparam::Atlas;
 use crate::bifurcations::Multiplier;
 use crate::error::CliError;
 use crate::output::{CsvFile, Field};
-use crate::plot::{Chart, DrawResult, Mark};
+use crate::plot::{draw_point, Chart, DrawResult, Mark};
 
 /// Header of `<stem>_points.csv`.
 pub const CSV_HEADER: &str = "kind,omega,velocity,curve,index,other_curve,other_index,period,\
@@ -37,7 +37,7 @@ fn mark(kind: PointKind) -> Mark {
     match kind {
         PointKind::FoldFlip => Mark::Cross(c),
         PointKind::Cusp => Mark::Square(c),
-        PointKind::ResonantGrazing => Mark::Ring(c, 6),
+        PointKind::ResonantGrazing => Mark::Ring(c, 6, 3),
         PointKind::Crossing => Mark::Dot(c, 5),
     }
 }
@@ -55,18 +55,8 @@ pub fn legend(points: &[Codim2Point]) -> Vec<(Mark, String)> {
 pub fn draw(chart: &mut Chart<'_, '_>, points: &[Codim2Point]) -> DrawResult {
     for p in points {
         let at = (p.omega, p.velocity);
-        let (c, _) = style(p.kind);
         chart.draw_series([Circle::new(at, 8, WHITE.mix(0.7).filled())])?;
-        match p.kind {
-            PointKind::FoldFlip => chart.draw_series([Cross::new(at, 7, c.stroke_width(3))])?,
-            PointKind::Cusp => chart.draw_series([
-                EmptyElement::at(at) + Rectangle::new([(-6, -6), (6, 6)], c.filled())
-            ])?,
-            PointKind::ResonantGrazing => {
-                chart.draw_series([Circle::new(at, 6, c.stroke_width(3))])?
-            }
-            PointKind::Crossing => chart.draw_series([Circle::new(at, 5, c.filled())])?,
-        };
+        draw_point(chart, at, mark(p.kind))?;
     }
     Ok(())
 }

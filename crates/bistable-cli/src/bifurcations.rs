@@ -11,7 +11,7 @@ use bistable_analysis::bifurcations::{BifurcationPoint, Kind};
 
 use crate::error::CliError;
 use crate::output::{CsvFile, Field};
-use crate::plot::{Chart, DrawResult, Mark};
+use crate::plot::{draw_point, Chart, DrawResult, Mark};
 
 /// Header of the `<stem>_bifurcations.csv` files.
 pub const CSV_HEADER: &str = "kind,omega,velocity,period,x0,v0,max_x,multiplier_1_re,\
@@ -68,7 +68,7 @@ fn mark(kind: Kind) -> Mark {
         Kind::Fold => Mark::Square(c),
         Kind::PeriodDoubling => Mark::Triangle(c),
         Kind::NeimarkSacker => Mark::Cross(c),
-        Kind::Grazing => Mark::Ring(c, 6),
+        Kind::Grazing => Mark::Ring(c, 6, 2),
         Kind::Sticking => Mark::Dot(c, 6),
     }
 }
@@ -85,17 +85,7 @@ pub fn legend(points: &[BifurcationPoint]) -> Vec<(Mark, String)> {
 /// Draws each point at `(Ω, max_x)` with its kind's marker.
 pub fn draw(chart: &mut Chart<'_, '_>, points: &[BifurcationPoint]) -> DrawResult {
     for p in points.iter().filter(|p| p.max_x.is_finite()) {
-        let at = (p.omega, p.max_x);
-        let (c, _) = style(p.kind);
-        match p.kind {
-            Kind::Fold => chart.draw_series([
-                EmptyElement::at(at) + Rectangle::new([(-6, -6), (6, 6)], c.filled())
-            ])?,
-            Kind::PeriodDoubling => chart.draw_series([TriangleMarker::new(at, 8, c.filled())])?,
-            Kind::NeimarkSacker => chart.draw_series([Cross::new(at, 7, c.stroke_width(3))])?,
-            Kind::Grazing => chart.draw_series([Circle::new(at, 6, c.stroke_width(2))])?,
-            Kind::Sticking => chart.draw_series([Circle::new(at, 6, c.filled())])?,
-        };
+        draw_point(chart, (p.omega, p.max_x), mark(p.kind))?;
     }
     Ok(())
 }

@@ -221,7 +221,8 @@ pub(crate) enum Mark {
     Line(RGBColor, u32),
     Dashed(RGBColor),
     Dot(RGBColor, i32),
-    Ring(RGBColor, i32),
+    /// A circle of radius `r` px drawn `w` px wide.
+    Ring(RGBColor, i32, u32),
     /// A filled square (12 px).
     Square(RGBColor),
     /// A filled triangle.
@@ -302,6 +303,21 @@ pub(crate) fn header<'a>(
     Ok(rest)
 }
 
+/// Draws the marker `mark` at the data point `at` of `chart`, as its legend entry shows it
+/// (the point markers: dot, ring, square, triangle, cross; the line-like marks draw nothing).
+pub(crate) fn draw_point(chart: &mut Chart<'_, '_>, at: (f64, f64), mark: Mark) -> DrawResult {
+    match mark {
+        Mark::Dot(c, r) => chart.draw_series([Circle::new(at, r, c.filled())])?,
+        Mark::Ring(c, r, w) => chart.draw_series([Circle::new(at, r, c.stroke_width(w))])?,
+        Mark::Square(c) => chart
+            .draw_series([EmptyElement::at(at) + Rectangle::new([(-6, -6), (6, 6)], c.filled())])?,
+        Mark::Triangle(c) => chart.draw_series([TriangleMarker::new(at, 8, c.filled())])?,
+        Mark::Cross(c) => chart.draw_series([Cross::new(at, 7, c.stroke_width(3))])?,
+        Mark::Line(..) | Mark::Dashed(_) | Mark::Band(_) | Mark::Halo(..) => return Ok(()),
+    };
+    Ok(())
+}
+
 fn draw_mark(area: &Area<'_>, mark: Mark, x: i32, y: i32) -> DrawResult {
     match mark {
         Mark::Line(c, w) => area.draw(&PathElement::new(
@@ -317,7 +333,7 @@ fn draw_mark(area: &Area<'_>, mark: Mark, x: i32, y: i32) -> DrawResult {
             }
         }
         Mark::Dot(c, r) => area.draw(&Circle::new((x + 15, y), r, c.filled()))?,
-        Mark::Ring(c, r) => area.draw(&Circle::new((x + 15, y), r, c.stroke_width(2)))?,
+        Mark::Ring(c, r, w) => area.draw(&Circle::new((x + 15, y), r, c.stroke_width(w)))?,
         Mark::Square(c) => area.draw(&Rectangle::new(
             [(x + 9, y - 6), (x + 21, y + 6)],
             c.filled(),

@@ -143,7 +143,7 @@ fn waveform(root: &Area<'_>, data: &PlotData) -> DrawResult {
             Mark::Line(PLATE, 2),
             "plate z(τ) = (V/Ω)·sin(Ωτ)".to_string(),
         ),
-        (Mark::Ring(IMPACT, 4), "impacts".to_string()),
+        (Mark::Ring(IMPACT, 4, 2), "impacts".to_string()),
     ];
     if !data.sticking.is_empty() {
         legend.push((Mark::Band(STICK), "sticking to the plate".to_string()));

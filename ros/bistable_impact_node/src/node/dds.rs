@@ -116,17 +116,7 @@ impl Log for Logger {
             return;
         }
         if self.stdout {
-            let tag = match level {
-                LogLevel::Debug => "DEBUG",
-                LogLevel::Info => "INFO",
-                LogLevel::Warn => "WARN",
-                LogLevel::Error => "ERROR",
-                LogLevel::Fatal => "FATAL",
-            };
-            let now = std::time::SystemTime::now()
-                .duration_since(std::time::UNIX_EPOCH)
-                .map_or(0.0, |d| d.as_secs_f64());
-            eprintln!("[{tag}] [{now:.9}] [{}]: {msg}", self.name);
+            stderr_line(level, &self.name, format_args!("{msg}"));
         }
         if self.rosout {
             self.handle.rosout_raw(
@@ -140,6 +130,22 @@ impl Log for Logger {
             );
         }
     }
+}
+
+/// Writes one log line of node `name` to standard error in the ROS console format,
+/// `[LEVEL] [unix time s] [name]: msg`.
+pub fn stderr_line(level: LogLevel, name: &str, msg: std::fmt::Arguments) {
+    let tag = match level {
+        LogLevel::Debug => "DEBUG",
+        LogLevel::Info => "INFO",
+        LogLevel::Warn => "WARN",
+        LogLevel::Error => "ERROR",
+        LogLevel::Fatal => "FATAL",
+    };
+    let now = std::time::SystemTime::now()
+        .duration_since(std::time::UNIX_EPOCH)
+        .map_or(0.0, |d| d.as_secs_f64());
+    eprintln!("[{tag}] [{now:.9}] [{name}]: {msg}");
 }
 
 /// The node's service servers (parameter services of `rcl_interfaces` and the control

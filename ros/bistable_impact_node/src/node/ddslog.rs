@@ -7,6 +7,10 @@
 use std::collections::HashMap;
 use std::sync::Mutex;
 
+use bistable_impact_node::logging::LogLevel;
+
+use super::dds::stderr_line;
+
 /// How many times one warning site of the DDS layer is shown.
 const PER_SITE: u32 = 3;
 
@@ -23,6 +27,7 @@ struct DdsLog {
     node: String,
     /// The most detailed level shown (warnings unless `BISTABLE_DDS_LOG` says more).
     level: log::LevelFilter,
+    /// How often each warning or error site (target, line) has logged.
     shown: Mutex<HashMap<(String, u32), u32>>,
 }
 
@@ -35,36 +40,30 @@ impl log::Log for DdsLog {
         if !self.enabled(record.metadata()) || is_benign(record) {
             return;
         }
-        let site = (record.target().to_owned(), record.line().unwrap_or(0));
-        let count = {
-            let mut shown = self.shown.lock().unwrap_or_else(|e| e.into_inner());
-            let n = shown.entry(site).or_insert(0);
-            *n += 1;
-            *n
-        };
         let limited = record.level() <= log::Level::Warn;
-        if limited && count > PER_SITE {
-            return;
+        let mut more = "";
+        if limited {
+            let site = (record.target().to_owned(), record.line().unwrap_or(0));
+            let mut shown = self.shown.lock().unwrap_or_else(|e| e.into_inner());
+            let count = shown.entry(site).or_insert(0);
+            *count = count.saturating_add(1);
+            if *count > PER_SITE {
+                return;
+            }
+            if *count == PER_SITE {
+                more = " (not shown again from this place)";
+            }
         }
-        let tag = match record.level() {
-            log::Level::Error => "ERROR",
-            log::Level::Warn => "WARN",
-            log::Level::Info => "INFO",
-            log::Level::Debug | log::Level::Trace => "DEBUG",
+        let level = match record.level() {
+            log::Level::Error => LogLevel::Error,
+            log::Level::Warn => LogLevel::Warn,
+            log::Level::Info => LogLevel::Info,
+            log::Level::Debug | log::Level::Trace => LogLevel::Debug,
         };
-        let now = std::time::SystemTime::now()
-            .duration_since(std::time::UNIX_EPOCH)
-            .map_or(0.0, |d| d.as_secs_f64());
-        let more = if limited && count == PER_SITE {
-            " (not shown again from this place)"
-        } else {
-            ""
-        };
-        eprintln!(
-            "[{tag}] [{now:.9}] [{}]: DDS ({}): {}{more}",
-            self.node,
-            record.target(),
-            record.args()
+        stderr_line(
+            level,
+            &self.node,
+            format_args!("DDS ({}): {}{more}", record.target(), record.args()),
         );
     }
 
