@@ -38,6 +38,7 @@ use bistable_core::SimError;
 
 use crate::arclength::{correct, norm, period_map, ArcPoint};
 use crate::branches::Branches;
+use crate::continuation::Curves;
 use crate::cycles::record_cycles;
 use crate::grazing::{approach, Test, GRAZING_TOL};
 use crate::orbit::Orbit;
@@ -571,6 +572,15 @@ impl Branch {
                 }
             })
             .collect()
+    }
+
+    /// The branches of `curves`, the continuation of `period`-periodic orbits over the grid
+    /// `models` (one V): [`Branch::from_natural`] or [`Branch::from_traces`] as the method was.
+    pub fn from_curves(models: &[Model], period: u32, curves: &Curves) -> Vec<Branch> {
+        match curves {
+            Curves::Natural(b) => Self::from_natural(models, b),
+            Curves::Arclength(t) => Self::from_traces(&models[0], period, t),
+        }
     }
 
     /// The pseudo-arclength `traces` of `period`-periodic orbits at `model`'s V, one branch

@@ -46,10 +46,7 @@ fn run(models: &[Model], period: u32, method: Method) -> (Curves, Vec<Bifurcatio
         &mut |_| Ok(()),
     )
     .unwrap();
-    let branches = match &curves {
-        Curves::Natural(b) => Branch::from_natural(models, b),
-        Curves::Arclength(t) => Branch::from_traces(&models[0], period, t),
-    };
+    let branches = Branch::from_curves(models, period, &curves);
     let found = locate::<SimError>(&branches, threads, &mut |_| Ok(())).unwrap();
     (curves, found)
 }

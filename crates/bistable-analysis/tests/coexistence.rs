@@ -3,16 +3,17 @@
 //! the basins of attraction (`basins::classify_starts` and `identify`, as `bistable basins`
 //! runs them) reach both, at the continuation's fixed points.
 
+mod common;
+
 use bistable_analysis::basins::{classify_starts, identify, Cell};
-use bistable_analysis::bifurcations::{locate, Branch, Kind};
-use bistable_analysis::continuation::{continue_orbits, Curves, Method};
+use bistable_analysis::bifurcations::Kind;
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::twoparam::{trace_all, CurveOptions};
 use bistable_analysis::Model;
 use bistable_core::{
-    continue_in_omega, ClassifyOptions, Params, ShootOptions, SimError, Sinusoid, SolverOptions,
-    Width,
+    continue_in_omega, ClassifyOptions, Params, ShootOptions, SimError, SolverOptions, Width,
 };
+use common::{model_at, p1_located};
 
 /// A basin attractor's anchor (its cycle's section point at plate phase 0) and the fixed
 /// point of the orbit continued there agree to this (max norm, units of Δx and ω0·Δx): the
@@ -23,30 +24,9 @@ const SAME_ORBIT: f64 = 1e-6;
 fn basins_find_both_stable_p1_orbits_inside_the_folds_hysteresis() {
     let v = 0.05;
     let models: Vec<Model> = (0..41)
-        .map(|i| {
-            let w = 1.2 + 0.01 * f64::from(i);
-            Model::new(
-                Params::paper(),
-                Sinusoid::new(w, v).unwrap(),
-                SolverOptions::default(),
-            )
-        })
+        .map(|i| model_at(1.2 + 0.01 * f64::from(i), v))
         .collect();
-    let threads = Threads::new(2).unwrap();
-    let Curves::Arclength(traces) = continue_orbits::<SimError>(
-        &models,
-        1,
-        2000,
-        Method::Arclength,
-        threads,
-        Width::preferred(),
-        &mut |_| Ok(()),
-    )
-    .unwrap() else {
-        panic!("arclength continuation gives traces");
-    };
-    let branches = Branch::from_traces(&models[0], 1, &traces);
-    let found = locate::<SimError>(&branches, threads, &mut |_| Ok(())).unwrap();
+    let (branches, found) = p1_located(&models);
     // The atlas's run: the fold and the doubling at V = 0.05 with their curves.
     let o = CurveOptions {
         omega_bounds: (1.2, 1.6),
@@ -117,7 +97,7 @@ fn basins_find_both_stable_p1_orbits_inside_the_folds_hysteresis() {
         0.0,
         ClassifyOptions::default(),
         &starts,
-        threads,
+        Threads::new(2).unwrap(),
         Width::preferred(),
         |i, r| {
             cells[i] = Some(r?);

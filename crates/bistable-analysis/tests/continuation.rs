@@ -2,11 +2,11 @@
 //! a 2-impact branch meet at a grazing corner: the branch is traced through it, and every
 //! traced stretch of a branch appears once.
 
+mod common;
+
 use bistable_analysis::arclength::covers;
-use bistable_analysis::continuation::{continue_orbits, Curves, Method};
-use bistable_analysis::parallel::Threads;
 use bistable_analysis::Model;
-use bistable_core::{Params, SimError, Sinusoid, SolverOptions, Width};
+use common::{model_at, p1_traces};
 
 /// Max-norm distance in `(x, x')` within which two orbits at one Ω are the same.
 const SAME: f64 = 5e-3;
@@ -14,28 +14,9 @@ const SAME: f64 = 5e-3;
 #[test]
 fn no_trace_runs_along_an_earlier_one() {
     let models: Vec<Model> = (0..21)
-        .map(|i| {
-            let w = 0.6 + 0.02 * f64::from(i);
-            Model::new(
-                Params::paper(),
-                Sinusoid::new(w, 0.03).unwrap(),
-                SolverOptions::default(),
-            )
-        })
+        .map(|i| model_at(0.6 + 0.02 * f64::from(i), 0.03))
         .collect();
-    let curves = continue_orbits::<SimError>(
-        &models,
-        1,
-        2000,
-        Method::Arclength,
-        Threads::new(2).unwrap(),
-        Width::preferred(),
-        &mut |_| Ok(()),
-    )
-    .unwrap();
-    let Curves::Arclength(traces) = curves else {
-        panic!("arclength continuation gives traces");
-    };
+    let traces = p1_traces(&models);
     // Both impact counts of the grazing corner are on one trace: it passes through the corner
     // (before continuation through grazing, the corner split the branch into two traces).
     assert!(

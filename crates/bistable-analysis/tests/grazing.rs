@@ -10,20 +10,13 @@
 //! distance to the next change on the branch (the fold at Ω = 0.8758), so each side is the
 //! located point's.
 
-use bistable_analysis::bifurcations::{locate, Branch, Kind};
-use bistable_analysis::continuation::{continue_orbits, Curves, Method};
-use bistable_analysis::grazing::{CROSSING_TOL, GRAZING_TOL};
-use bistable_analysis::parallel::Threads;
-use bistable_analysis::Model;
-use bistable_core::{Event, Params, SimError, Sinusoid, SolverOptions, Width};
+mod common;
 
-fn model_at(omega: f64, v: f64) -> Model {
-    Model::new(
-        Params::paper(),
-        Sinusoid::new(omega, v).unwrap(),
-        SolverOptions::default(),
-    )
-}
+use bistable_analysis::bifurcations::Kind;
+use bistable_analysis::grazing::{CROSSING_TOL, GRAZING_TOL};
+use bistable_analysis::Model;
+use bistable_core::Event;
+use common::{model_at, p1_located};
 
 fn model(omega: f64) -> Model {
     model_at(omega, 0.05)
@@ -46,22 +39,7 @@ fn impacts_at(omega: f64, velocity: f64, x: f64, v: f64, settle: u32, record: u3
 #[test]
 fn grazing_corner_of_the_p1_branch_located_and_simulated() {
     let models: Vec<Model> = (0..31).map(|i| model(0.8 + 0.005 * f64::from(i))).collect();
-    let threads = Threads::new(2).unwrap();
-    let curves = continue_orbits::<SimError>(
-        &models,
-        1,
-        2000,
-        Method::Arclength,
-        threads,
-        Width::preferred(),
-        &mut |_| Ok(()),
-    )
-    .unwrap();
-    let Curves::Arclength(traces) = curves else {
-        panic!("arclength continuation gives traces");
-    };
-    let branches = Branch::from_traces(&models[0], 1, &traces);
-    let found = locate::<SimError>(&branches, threads, &mut |_| Ok(())).unwrap();
+    let (branches, found) = p1_located(&models);
     let grazings: Vec<_> = found.iter().filter(|p| p.kind == Kind::Grazing).collect();
     let [g] = grazings[..] else {
         panic!("one grazing point expected: {found:#?}");
@@ -106,22 +84,7 @@ fn both_grazing_corners_at_v003_located_and_passed() {
     let models: Vec<Model> = (0..21)
         .map(|i| model_at(0.6 + 0.02 * f64::from(i), 0.03))
         .collect();
-    let threads = Threads::new(2).unwrap();
-    let curves = continue_orbits::<SimError>(
-        &models,
-        1,
-        2000,
-        Method::Arclength,
-        threads,
-        Width::preferred(),
-        &mut |_| Ok(()),
-    )
-    .unwrap();
-    let Curves::Arclength(traces) = curves else {
-        panic!("arclength continuation gives traces");
-    };
-    let branches = Branch::from_traces(&models[0], 1, &traces);
-    let found = locate::<SimError>(&branches, threads, &mut |_| Ok(())).unwrap();
+    let (_, found) = p1_located(&models);
     let mut corners: Vec<_> = found.iter().filter(|p| p.kind == Kind::Grazing).collect();
     corners.sort_by(|p, q| p.omega.total_cmp(&q.omega));
     let [low, high] = corners[..] else {

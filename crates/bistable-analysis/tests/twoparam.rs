@@ -5,29 +5,23 @@
 //! curve, a crossing lies on both curves, a resonant grazing has the one-parameter grazing at
 //! its V.
 
+mod common;
+
 use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch, BranchPoint, Kind};
 use bistable_analysis::codim2::{self, Codim2Point, PointKind};
 use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::twoparam::{continue_point, trace_all, Atlas, CurveOptions};
 use bistable_analysis::Model;
-use bistable_core::{
-    continue_in_omega, Params, ShootOptions, SimError, Sinusoid, SolverOptions, Width,
-};
+use bistable_core::{continue_in_omega, Params, ShootOptions, SimError, SolverOptions, Width};
+use common::{model_at, p1_located};
 
 /// Agreement in Ω of a curve point and the point located at its V in one parameter.
 const SAME_OMEGA: f64 = 1e-8;
 
 fn grid(a: f64, b: f64, n: usize, v: f64) -> Vec<Model> {
     (0..n)
-        .map(|i| {
-            let w = a + (b - a) * i as f64 / (n - 1) as f64;
-            Model::new(
-                Params::paper(),
-                Sinusoid::new(w, v).unwrap(),
-                SolverOptions::default(),
-            )
-        })
+        .map(|i| model_at(a + (b - a) * i as f64 / (n - 1) as f64, v))
         .collect()
 }
 
@@ -129,25 +123,7 @@ fn p2_period_doubling_curve_agrees_with_one_parameter_continuation() {
 /// `velocity`, and the bifurcation points located on them.
 fn located((a, b, n): (f64, f64, usize), velocity: f64) -> (Vec<Model>, Vec<BifurcationPoint>) {
     let models = grid(a, b, n, velocity);
-    let threads = Threads::new(2).unwrap();
-    let Curves::Arclength(t) = continue_orbits::<SimError>(
-        &models,
-        1,
-        2000,
-        Method::Arclength,
-        threads,
-        Width::preferred(),
-        &mut |_| Ok(()),
-    )
-    .unwrap() else {
-        panic!("arclength continuation gives traces");
-    };
-    let found = locate::<SimError>(
-        &Branch::from_traces(&models[0], 1, &t),
-        threads,
-        &mut |_| Ok(()),
-    )
-    .unwrap();
+    let (_, found) = p1_located(&models);
     (models, found)
 }
 

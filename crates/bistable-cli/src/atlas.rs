@@ -9,7 +9,7 @@ use serde::Serialize;
 
 use bistable_analysis::bifurcations::{locate, Branch, Kind};
 use bistable_analysis::codim2::{self, Codim2Point};
-use bistable_analysis::continuation::{continue_orbits, Curves, Method};
+use bistable_analysis::continuation::{continue_orbits, Method};
 use bistable_analysis::twoparam::{trace_all, CurveOptions, CurvePoint};
 
 use crate::atlas_points;
@@ -283,10 +283,7 @@ pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
     let curves = continue_orbits(&models, p, args.settle, method, threads, width, &mut |r| {
         bars.report(r)
     })?;
-    let on = match &curves {
-        Curves::Natural(b) => Branch::from_natural(&models, b),
-        Curves::Arclength(t) => Branch::from_traces(&models[0], p, t),
-    };
+    let on = Branch::from_curves(&models, p, &curves);
     let starts = locate(&on, threads, &mut |r| bars.report(r))?;
     let (lo, hi) = range.bounds();
     let o = CurveOptions {

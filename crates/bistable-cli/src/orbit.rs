@@ -394,10 +394,7 @@ fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
         let curves = continue_orbits(&models, p, args.settle, method, threads, width, &mut |r| {
             bars.report(r)
         })?;
-        let on = match &curves {
-            Curves::Natural(b) => Branch::from_natural(&models, b),
-            Curves::Arclength(t) => Branch::from_traces(&models[0], p, t),
-        };
+        let on = Branch::from_curves(&models, p, &curves);
         found.extend(locate(&on, threads, &mut |r| bars.report(r))?);
         all.push((v, curves));
     }

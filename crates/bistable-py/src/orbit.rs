@@ -333,10 +333,7 @@ pub(crate) fn continue_omega<'py>(
                         continue_orbits(ms, period, settle, method, threads, width, &mut |_| {
                             check_signals()
                         })?;
-                    let on = match &c {
-                        Curves::Natural(b) => Branch::from_natural(ms, b),
-                        Curves::Arclength(t) => Branch::from_traces(&ms[0], period, t),
-                    };
+                    let on = Branch::from_curves(ms, period, &c);
                     let found = locate(&on, threads, &mut |_| check_signals())?;
                     Ok((c, found))
                 })
@@ -564,10 +561,7 @@ pub(crate) fn atlas<'py>(
             let c = continue_orbits(&models, period, settle, method, threads, width, &mut |_| {
                 check_signals()
             })?;
-            let on = match &c {
-                Curves::Natural(b) => Branch::from_natural(&models, b),
-                Curves::Arclength(t) => Branch::from_traces(&models[0], period, t),
-            };
+            let on = Branch::from_curves(&models, period, &c);
             let found = locate(&on, threads, &mut |_| check_signals())?;
             Ok(trace_all(&models[0], found, o).map(|all| {
                 let points = codim2::points(&models[0], &all, o);
