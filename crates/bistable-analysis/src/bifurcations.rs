@@ -101,16 +101,24 @@ impl Kind {
     /// The test function of a smooth kind at multipliers `λ`: `det(M − I)`, `det(M + I)` or
     /// `det M − 1` (`None` for the non-smooth kinds).
     fn test(self, lambda: [(f64, f64); 2]) -> Option<f64> {
-        let tr = lambda[0].0 + lambda[1].0;
-        // λ1·λ2 is real for a real matrix.
-        let det = lambda[0].0 * lambda[1].0 - lambda[0].1 * lambda[1].1;
         match self {
-            Kind::Fold => Some(1.0 - tr + det),
-            Kind::PeriodDoubling => Some(1.0 + tr + det),
-            Kind::NeimarkSacker => Some(det - 1.0),
+            Kind::Fold => Some(det_shifted(lambda, -1.0)),
+            Kind::PeriodDoubling => Some(det_shifted(lambda, 1.0)),
+            Kind::NeimarkSacker => Some(det(lambda) - 1.0),
             Kind::Grazing | Kind::Sticking => None,
         }
     }
+}
+
+/// `det M` of a real 2×2 matrix with eigenvalues `λ` (`λ1·λ2`, real for a real matrix).
+fn det(lambda: [(f64, f64); 2]) -> f64 {
+    lambda[0].0 * lambda[1].0 - lambda[0].1 * lambda[1].1
+}
+
+/// `det(M + s·I) = 1 + s·tr M + det M` of a real 2×2 matrix with eigenvalues `λ`, `s` = ±1:
+/// the fold's test function with `s = −1`, the period doubling's with `s = +1`.
+pub(crate) fn det_shifted(lambda: [(f64, f64); 2], s: f64) -> f64 {
+    1.0 + s * (lambda[0].0 + lambda[1].0) + det(lambda)
 }
 
 /// One orbit of a branch, as the locator sees it.

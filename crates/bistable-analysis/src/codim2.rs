@@ -28,6 +28,7 @@
 use bistable_core::shooting::eigenvalues;
 
 use crate::arclength::period_map;
+use crate::bifurcations::det_shifted;
 use crate::twoparam::{tangent, Atlas, CurveOptions, CurvePoint, System, Value};
 use crate::Model;
 
@@ -155,11 +156,10 @@ impl<'a> Chart<'a> {
 }
 
 /// The other test function on a curve of `sign` (+1: fold, −1: period doubling) at
-/// multipliers `λ`: `det(M + sign·I)`.
+/// multipliers `λ`: `det(M + sign·I)`, the period doubling's on a fold curve and the fold's on
+/// a period-doubling curve.
 fn other_test(lambda: [(f64, f64); 2], sign: f64) -> f64 {
-    let tr = lambda[0].0 + lambda[1].0;
-    let det = lambda[0].0 * lambda[1].0 - lambda[0].1 * lambda[1].1;
-    1.0 + sign * tr + det
+    det_shifted(lambda, sign)
 }
 
 /// The fold's quadratic coefficient `a = ½·⟨p, D²P(q, q)⟩` at the fold-curve point `w` with
