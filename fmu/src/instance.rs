@@ -816,6 +816,7 @@ impl Instance {
                 ..
             }
         );
+        model.ahead.host_step(self.start_time, tc, h);
         let result = model.step(
             t_end,
             &self.values,

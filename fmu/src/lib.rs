@@ -6,6 +6,7 @@
 //! references, start values and ranges come from the top-level `modelDescription.xml` (through
 //! `build.rs`). Every export catches panics and checks its arguments; see `fmu/README.md`.
 
+pub mod ahead;
 pub mod exports;
 pub mod exports3;
 pub mod fmi2;

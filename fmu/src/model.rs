@@ -5,6 +5,7 @@
 //! `delta_x = 1` and `mass = 1` every conversion is a multiplication by 1: the FMU is the
 //! nondimensional model bit for bit.
 
+use std::cell::RefCell;
 use std::ops::ControlFlow;
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
@@ -17,6 +18,7 @@ use bistable_core::{
     Simulator, Sinusoid, SolverOptions, State, StepView, Well,
 };
 
+use crate::ahead::Ahead;
 use crate::md::var;
 use crate::num::Num;
 
@@ -149,6 +151,8 @@ pub struct Model {
     pub at_event: bool,
     /// The divided differences of the last sampled piece's nodes (derived data, not saved).
     pub memo: PieceMemo,
+    /// The mass read ahead at the host's next communication points (derived data, not saved).
+    pub ahead: Ahead,
 }
 
 /// Collects the events of an advance and the end of the last Taylor step computed.
@@ -314,6 +318,7 @@ impl Model {
             impulse: impulse_of(events),
             at_event: false,
             memo: PieceMemo::default(),
+            ahead: Ahead::default(),
         })
     }
 
@@ -395,6 +400,7 @@ impl Model {
             impulse: saved.impulse,
             at_event: saved.at_event,
             memo: PieceMemo::default(),
+            ahead: Ahead::default(),
         };
         model.check_physical(values)?;
         Ok(model)
@@ -732,29 +738,74 @@ impl Model {
         }
     }
 
-    /// Writes every output variable (and the state derivatives) into `values`.
+    /// Writes every output variable (and the state derivatives) into `values`, for the model's
+    /// own use (nothing is read ahead).
     pub fn write_outputs(&mut self, values: &mut [f64]) -> Result<(), String> {
-        self.write_some(values, ALL)
+        self.write(values, ALL, false)
     }
 
-    /// Writes the variables of `want` (see [`Observed::write`]) into `values`, evaluating only
-    /// what they need.
+    /// Writes the variables of `want` (see [`Observed::write`]) into `values` for the host,
+    /// evaluating only what they need; the mass may be read ahead at the host's next points
+    /// ([`Ahead`]).
     pub fn write_some(&mut self, values: &mut [f64], want: VarSet) -> Result<(), String> {
+        self.write(values, want, true)
+    }
+
+    /// [`Model::write_some`], reading ahead only if `ahead` (the same values either way).
+    fn write(&mut self, values: &mut [f64], want: VarSet, ahead: bool) -> Result<(), String> {
         // At a communication time inside the core's current step the outputs come from that
-        // step as they would after advancing the core there (which only moves its time).
-        let now = match self.pending.map(Instant::new) {
-            Some(t) if self.sim.inside_step(t) => t,
-            _ => {
+        // step as they would after advancing the core there (which only moves its time). The
+        // mass there may have been read ahead, or is read now with the host's next points
+        // (`Ahead`, keyed by that time: the pending one, or the core's when a step ran it to
+        // the communication time).
+        let at = self.pending.or_else(|| {
+            let (hi, lo) = self.sim.instant().parts();
+            (lo.to_bits() == 0).then_some(hi)
+        });
+        let at = at.filter(|_| ahead);
+        let read = at.and_then(|tau| self.ahead.lookup(&self.sim, tau));
+        let ahead_tau = at.filter(|&tau| read.is_some() || self.sim.inside_step(Instant::new(tau)));
+        let xv_only = want & !(bit(var::x) | bit(var::v)) == 0;
+        if let (Some(tau), true) = (ahead_tau, xv_only) {
+            let lane = read.or_else(|| self.ahead.read(&self.sim, &self.scale, tau));
+            if let Some(lane) = lane {
+                let (x, v) = self.ahead.mass(lane);
+                // A host's loop reading the position and velocity in flight: the values
+                // `Observed::write` gives, without computing anything else.
+                if want & bit(var::x) != 0 {
+                    values[var::x] = self.scale.length(x);
+                }
+                if want & bit(var::v) != 0 {
+                    values[var::v] = self.scale.velocity(v);
+                }
+                return Ok(());
+            }
+        }
+        let now = match ahead_tau {
+            Some(tau) => Instant::new(tau),
+            None => {
                 self.sync()?;
                 self.sim.instant()
             }
         };
-        let sim = &self.sim;
+        // Not read again when the position and velocity alone were asked for just above.
+        let fill = ahead_tau.filter(|_| !xv_only);
+        let (sim, scale) = (&self.sim, &self.scale);
+        let ahead = RefCell::new(&mut self.ahead);
         let stats = sim.stats();
         Observed {
             params: sim.params(),
             tau: now.to_f64(),
-            mass: || sim.mass_at(now).unwrap_or_else(|| sim.mass()),
+            mass: || {
+                let mut ahead = ahead.borrow_mut();
+                match read.or_else(|| fill.and_then(|tau| ahead.read(sim, scale, tau))) {
+                    Some(lane) => {
+                        let (x, v) = ahead.mass(lane);
+                        (x, v, ContactMode::Free, sim.well())
+                    }
+                    None => sim.mass_at(now).unwrap_or_else(|| sim.mass()),
+                }
+            },
             plate: || sim.plate().motion(now),
             impacts: stats.impacts,
             snap_throughs: stats.snap_throughs,
@@ -1414,6 +1465,80 @@ mod tests {
                     me.write_some(&mut one, bit(i));
                     same(&all, &one, i, t);
                 }
+            }
+        }
+    }
+
+    #[test]
+    fn reads_ahead_give_the_values_of_a_read_without_them() {
+        // Hosts reading x and v after every step, counting time as fmpy does (start + n dt),
+        // by adding the step, or irregularly; every 7th read asks for every output. The values
+        // must be those of a model that reads nothing ahead, bit for bit.
+        let xv = bit(var::x) | bit(var::v);
+        type Clock = fn(f64, u32) -> (f64, f64);
+        let hosts: [(&str, f64, Clock); 5] = [
+            ("grid from 0", 0.0, |_, k| {
+                (f64::from(k) * 0.01, f64::from(k + 1) * 0.01)
+            }),
+            ("grid from 0.3", 0.3, |_, k| {
+                (0.3 + f64::from(k) * 0.007, 0.3 + f64::from(k + 1) * 0.007)
+            }),
+            ("sum", 0.0, |t, _| (t, t + 0.01)),
+            ("sum from 0.1", 0.1, |t, _| (t, t + 0.013)),
+            ("irregular", 0.0, |t, k| {
+                (t, t + 0.004 + 0.003 * f64::from(k % 5))
+            }),
+        ];
+        for (omega, v) in [(1.75, 0.07), (0.2, 0.05)] {
+            for (name, start, clock) in hosts {
+                let mut values = defaults();
+                values[var::Omega] = omega;
+                values[var::V] = v;
+                let mut events = Vec::new();
+                let none = [None; MAX_PLATE_ORDER + 1];
+                let mut m = Model::start(&values, &none, start, &mut events).unwrap();
+                let mut plain = m.clone();
+                let (mut t, mut hits, mut reads) = (start, 0, 0);
+                for k in 0..3000 {
+                    let (tc, end) = clock(t, k);
+                    let h = end - tc;
+                    m.ahead.host_step(start, tc, h);
+                    m.step(tc + h, &values, &none, &mut events, false)
+                        .ok()
+                        .unwrap();
+                    plain
+                        .step(tc + h, &values, &none, &mut events, false)
+                        .ok()
+                        .unwrap();
+                    let at = m.pending.unwrap_or_else(|| m.sim.instant().to_f64());
+                    hits += usize::from(m.ahead.clone().lookup(&m.sim, at).is_some());
+                    reads += 1;
+                    let want = if k % 7 == 0 { ALL } else { xv };
+                    let (mut got, mut expected) = (values.clone(), values.clone());
+                    m.write_some(&mut got, want).unwrap();
+                    plain.write_outputs(&mut expected).unwrap();
+                    for i in (0..VARS.len()).filter(|&i| want & bit(i) != 0) {
+                        assert_eq!(
+                            got[i].to_bits(),
+                            expected[i].to_bits(),
+                            "{name}, Omega {omega}: {} at t = {}",
+                            VARS[i].name,
+                            tc + h
+                        );
+                    }
+                    t = tc + h;
+                }
+                // The patterns are read ahead at most points in flight (one read per Taylor
+                // step evaluates the next ones); the irregular host never is.
+                let expect_hits = name != "irregular";
+                assert!(
+                    if expect_hits {
+                        hits * 2 > reads
+                    } else {
+                        hits == 0
+                    },
+                    "{name}, Omega {omega}: {hits} of {reads} reads ahead"
+                );
             }
         }
     }

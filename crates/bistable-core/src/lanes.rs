@@ -1,7 +1,8 @@
 //! Lane types: the number types the integrator's kernels are written over.
 //!
 //! A kernel generic over [`Lane`] computes one trajectory with `f64` and `N` independent
-//! trajectories at once with [`F64x4`] or [`F64x8`], one per SIMD lane. Every operation is
+//! trajectories at once with [`F64x4`] or [`F64x8`], one per SIMD lane ([`F64x16`], two AVX-512
+//! registers, for evaluations whose latency two independent chains hide). Every operation is
 //! the IEEE operation of each lane on its own (no fused multiply-add, no reassociation), so
 //! lane `i` of a batch computes bit for bit what the `f64` kernel computes for trajectory
 //! `i`: the batch is the same integrator, not a second one. Functions whose vector versions
@@ -285,6 +286,7 @@ macro_rules! lanes {
 
 lanes!(F64x4, 4, 32);
 lanes!(F64x8, 8, 64);
+lanes!(F64x16, 16, 64);
 
 /// Lane width of a batch: how many trajectories advance together.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]

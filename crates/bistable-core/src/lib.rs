@@ -53,5 +53,7 @@ pub use ramp::SetpointRamp;
 pub use sampled::{PieceMemo, Sample, SampleHistory};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
 pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
-pub use simulator::{Observer, SimError, Simulator, State, Stats, StepView};
+pub use simulator::{
+    Flights, Observer, SimError, Simulator, State, Stats, StepKey, StepView, FLIGHT_LANES,
+};
 pub use time::Instant;

@@ -8,10 +8,12 @@
 
 use std::fmt;
 use std::ops::ControlFlow;
+use std::sync::atomic::{AtomicU64, Ordering};
 
 use crate::chatter;
 use crate::checkpoint::{Checkpoint, KeptFlight, PlateRecord};
 use crate::events::{ContactMode, Event, Impact, StickCause, Well};
+use crate::lanes::{F64x16, Lane};
 use crate::law::{self, Contact};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
@@ -20,7 +22,7 @@ use crate::roots::{first_root, first_root_from};
 use crate::shaker::Sinusoid;
 use crate::shaker::{PlateEval, PlateMotion, PolyPiece};
 use crate::taylor::{self, eval, eval_d, FlightSeries, VariationSeries, BUF};
-use crate::time::Instant;
+use crate::time::{self, Instant};
 
 /// Why a run could not go on. The simulator stays usable at its last consistent state.
 #[derive(Debug, Clone, PartialEq)]
@@ -284,6 +286,15 @@ struct Step {
     kept: bool,
     /// Bounds over the whole reach, for continuing the step across plate pieces.
     guard: Option<Guard>,
+    /// Which computation `series` holds: a number no other series of the process gets
+    /// ([`next_stamp`]; 0 before the first), so that equal stamps mean equal series.
+    stamp: u64,
+}
+
+/// A fresh [`Step::stamp`].
+fn next_stamp() -> u64 {
+    static STAMPS: AtomicU64 = AtomicU64::new(1);
+    STAMPS.fetch_add(1, Ordering::Relaxed)
 }
 
 /// What a free step's series allows to conclude cheaply over its whole reach, for continuing
@@ -339,6 +350,34 @@ pub(crate) enum Progress {
     NeedStep,
     /// The advance is over: the target was reached (`true`) or the observer stopped it.
     Stopped(bool),
+}
+
+/// What [`Simulator::mass_at`] depends on for instants in free flight inside the current step
+/// ([`Simulator::step_key`]). The default key is that of no step.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub struct StepKey {
+    /// [`Step::stamp`] (0: no series).
+    stamp: u64,
+    /// The bits of the step's start and length.
+    t0: u64,
+    t0_lo: u64,
+    len: u64,
+    /// Bit 0: the step is live and in flight; bit 1: in well 2.
+    flags: u64,
+}
+
+/// Instants [`Simulator::flights_at`] evaluates at once.
+pub const FLIGHT_LANES: usize = 16;
+
+/// The mass at [`FLIGHT_LANES`] instants ([`Simulator::flights_at`]).
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Flights {
+    /// Position at each instant where `flying`.
+    pub x: [f64; FLIGHT_LANES],
+    /// Velocity at each instant where `flying`.
+    pub v: [f64; FLIGHT_LANES],
+    /// The instant is in free flight inside the step, after its start.
+    pub flying: [bool; FLIGHT_LANES],
 }
 
 /// The event-driven simulator (see the module documentation).
@@ -495,6 +534,7 @@ impl Simulator {
                 reach: 0.0,
                 kept: false,
                 guard: None,
+                stamp: 0,
             },
             live: false,
             now: t0,
@@ -607,6 +647,78 @@ impl Simulator {
         } else {
             let (z, zdot, _) = self.plate.law().motion(t);
             Some((self.u0 + z, self.w0 + zdot, ContactMode::Free, self.well))
+        }
+    }
+
+    /// The potential well the mass is in now.
+    pub fn well(&self) -> Well {
+        self.well
+    }
+
+    /// What [`Simulator::mass_at`] depends on for an instant in free flight inside the current
+    /// step: at two moments with equal keys, `mass_at` of such an instant gives the same values
+    /// (a cache of them stays valid while the key does).
+    pub fn step_key(&self) -> StepKey {
+        let flying = self.live && !self.step.riding;
+        StepKey {
+            stamp: self.step.stamp,
+            t0: self.t0.parts().0.to_bits(),
+            t0_lo: self.t0.parts().1.to_bits(),
+            len: self.step.len.to_bits(),
+            flags: u64::from(flying) | u64::from(self.well == Well::Two) << 1,
+        }
+    }
+
+    /// [`Simulator::mass_at`] at [`FLIGHT_LANES`] instants at once, for those in free flight
+    /// inside the current step after its start: where `flying[i]`, `x[i]` and `v[i]` are the
+    /// position and velocity of `mass_at(ts[i])` bit for bit (its mode is free flight, its well
+    /// [`Simulator::well`]; the step's series is evaluated in SIMD lanes, each lane with the
+    /// IEEE operations of the scalar evaluation, see [`crate::lanes`]). For the other instants
+    /// ask `mass_at`.
+    pub fn flights_at(&self, ts: &[Instant; FLIGHT_LANES]) -> Flights {
+        #[cfg(target_arch = "x86_64")]
+        if std::arch::is_x86_feature_detected!("avx512f") {
+            // SAFETY: the CPU has the feature, checked just above.
+            return unsafe { self.flights_at_avx512(ts) };
+        }
+        self.flights_in_lanes(ts)
+    }
+
+    /// [`Simulator::flights_at`] compiled for AVX-512 registers (the same operations).
+    #[cfg(target_arch = "x86_64")]
+    #[target_feature(enable = "avx512f")]
+    fn flights_at_avx512(&self, ts: &[Instant; FLIGHT_LANES]) -> Flights {
+        self.flights_in_lanes(ts)
+    }
+
+    /// The body of [`Simulator::flights_at`], inlined into each of its compilations.
+    #[inline(always)]
+    fn flights_in_lanes(&self, ts: &[Instant; FLIGHT_LANES]) -> Flights {
+        if !self.live || self.step.riding || self.step.len <= 0.0 {
+            return Flights::default();
+        }
+        // `inside_step` and `t.since(t0) > 0` in lanes, with the step's end computed once.
+        let (hi, lo) = (
+            F64x16(ts.map(|t| t.parts().0)),
+            F64x16(ts.map(|t| t.parts().1)),
+        );
+        let at = |t: Instant| (F64x16::splat(t.parts().0), F64x16::splat(t.parts().1));
+        let ((t0_hi, t0_lo), (now_hi, now_lo)) = (at(self.t0), at(self.now));
+        let (end_hi, end_lo) = at(self.t0 + self.step.len);
+        let zero = F64x16::splat(0.0);
+        let s = time::since(hi, lo, t0_hi, t0_lo);
+        let before_now = time::since(now_hi, now_lo, hi, lo);
+        let not_before_now = F64x16::or(before_now.lt(zero), before_now.equal(zero));
+        let before_end = time::since(end_hi, end_lo, hi, lo).gt(zero);
+        let flying = F64x16::and(F64x16::and(not_before_now, before_end), s.gt(zero));
+        if !flying.contains(&true) {
+            return Flights::default();
+        }
+        let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
+        Flights {
+            x: x.0,
+            v: v.0,
+            flying,
         }
     }
 
@@ -1127,6 +1239,7 @@ impl Simulator {
         }
         let p = self.order;
         let zero = [0.0; BUF];
+        self.step.stamp = next_stamp();
         taylor::flight(
             self.params.zeta(),
             k.x0,
@@ -1190,6 +1303,7 @@ impl Simulator {
         step.reach = 0.0;
         step.kept = false;
         step.guard = None;
+        step.stamp = next_stamp();
         match self.mode {
             ContactMode::Free => {
                 step.riding = false;
@@ -1376,6 +1490,7 @@ impl Simulator {
         step.riding = false;
         step.kept = false;
         step.guard = None;
+        step.stamp = next_stamp();
         // The kernel's Bernstein coefficients are those of the whole gap, so not of the gap
         // divided by `s` when the step leaves the plate.
         let mut bernstein = (!out.clear && !leaving).then_some([0.0; BUF]);

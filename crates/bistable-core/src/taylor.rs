@@ -326,14 +326,15 @@ pub(crate) fn eval(c: &[f64], s: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, &ck| acc * s + ck)
 }
 
-/// Value and derivative of `Σ c_k s^k`.
-#[inline]
-pub(crate) fn eval_d(c: &[f64], s: f64) -> (f64, f64) {
-    let mut p = 0.0_f64;
-    let mut d = 0.0_f64;
+/// Value and derivative of `Σ c_k s^k`, at one `s` (`f64`) or at one per lane (inlined, so
+/// that a caller compiled for wider registers evaluates the lanes in them).
+#[inline(always)]
+pub(crate) fn eval_d<L: Lane>(c: &[f64], s: L) -> (L, L) {
+    let mut p = L::splat(0.0);
+    let mut d = L::splat(0.0);
     for &ck in c.iter().rev() {
         d = d * s + p;
-        p = p * s + ck;
+        p = p * s + L::splat(ck);
     }
     (p, d)
 }

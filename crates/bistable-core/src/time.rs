@@ -5,6 +5,8 @@
 //! error in `lo` makes the accumulated time exact to about `1e-27` relative, and the shaker phase
 //! `Ωτ mod 2π` is then computed from both parts (see [`crate::shaker`]).
 
+use crate::lanes::Lane;
+
 /// An instant `hi + lo` (time units), with `|lo| ≤ ulp(hi)/2`.
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Instant {
@@ -12,13 +14,21 @@ pub struct Instant {
     lo: f64,
 }
 
-/// Error-free sum: `a + b = s + err` exactly (Knuth's TwoSum).
+/// Error-free sum: `a + b = s + err` exactly (Knuth's TwoSum), in each lane.
 #[inline]
-pub(crate) fn two_sum(a: f64, b: f64) -> (f64, f64) {
+pub(crate) fn two_sum<L: Lane>(a: L, b: L) -> (L, L) {
     let s = a + b;
     let bb = s - a;
     let err = (a - (s - bb)) + (b - bb);
     (s, err)
+}
+
+/// `(hi + lo) − (e_hi + e_lo)` as a double (accurate to one rounding) in each lane: instants
+/// given by their parts ([`Instant::since`] for one).
+#[inline(always)]
+pub(crate) fn since<L: Lane>(hi: L, lo: L, e_hi: L, e_lo: L) -> L {
+    let (s, e) = two_sum(hi, -e_hi);
+    s + (e + (lo - e_lo))
 }
 
 /// `x.round()` (halves away from zero) in plain arithmetic, the same value for every `x`: on
@@ -100,8 +110,7 @@ impl Instant {
 
     /// `self − earlier` as a double (accurate to one rounding).
     pub fn since(self, earlier: Instant) -> f64 {
-        let (s, e) = two_sum(self.hi, -earlier.hi);
-        s + (e + (self.lo - earlier.lo))
+        since(self.hi, self.lo, earlier.hi, earlier.lo)
     }
 
     /// `ω·(self − origin) + offset` reduced to `[−π, π)`, accurate to a few ulps of `2π` for any
