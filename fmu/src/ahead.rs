@@ -65,11 +65,13 @@ impl Ahead {
         let now = sim.instant();
         // `mass_at` asks `now <= t`: it held when the lane was computed, and holds while the
         // core's time has not moved.
-        let after_now = matches!(
-            now.partial_cmp(&Instant::new(tau)),
-            Some(Ordering::Less | Ordering::Equal)
-        );
-        if bits(now) != self.now && !after_now {
+        let after_now = || {
+            matches!(
+                now.partial_cmp(&Instant::new(tau)),
+                Some(Ordering::Less | Ordering::Equal)
+            )
+        };
+        if bits(now) != self.now && !after_now() {
             return None;
         }
         self.next = (lane + 1) % LANES;

@@ -748,36 +748,58 @@ impl Model {
     /// evaluating only what they need; the mass may be read ahead at the host's next points
     /// ([`Ahead`]).
     pub fn write_some(&mut self, values: &mut [f64], want: VarSet) -> Result<(), String> {
+        // The common read of a host's loop, the position and velocity read ahead, kept short.
+        if want & !XV == 0 {
+            if let Some(lane) = self
+                .ahead_at()
+                .and_then(|tau| self.ahead.lookup(&self.sim, tau))
+            {
+                self.write_xv(values, want, lane);
+                return Ok(());
+            }
+        }
         self.write(values, want, true)
     }
 
+    /// The time (`τ`) the mass may be read ahead at, see [`Model::write`].
+    #[inline]
+    fn ahead_at(&self) -> Option<f64> {
+        self.pending.or_else(|| {
+            let (hi, lo) = self.sim.instant().parts();
+            (lo.to_bits() == 0).then_some(hi)
+        })
+    }
+
+    /// Writes `x` and `v` of `want` from the mass read ahead in `lane`: the values
+    /// `Observed::write` gives from it.
+    #[inline]
+    fn write_xv(&self, values: &mut [f64], want: VarSet, lane: usize) {
+        let (x, v) = self.ahead.mass(lane);
+        if want & bit(var::x) != 0 {
+            values[var::x] = self.scale.length(x);
+        }
+        if want & bit(var::v) != 0 {
+            values[var::v] = self.scale.velocity(v);
+        }
+    }
+
     /// [`Model::write_some`], reading ahead only if `ahead` (the same values either way).
+    #[inline(never)]
     fn write(&mut self, values: &mut [f64], want: VarSet, ahead: bool) -> Result<(), String> {
         // At a communication time inside the core's current step the outputs come from that
         // step as they would after advancing the core there (which only moves its time). The
         // mass there may have been read ahead, or is read now with the host's next points
         // (`Ahead`, keyed by that time: the pending one, or the core's when a step ran it to
         // the communication time).
-        let at = self.pending.or_else(|| {
-            let (hi, lo) = self.sim.instant().parts();
-            (lo.to_bits() == 0).then_some(hi)
-        });
-        let at = at.filter(|_| ahead);
+        let at = self.ahead_at().filter(|_| ahead);
         let read = at.and_then(|tau| self.ahead.lookup(&self.sim, tau));
         let ahead_tau = at.filter(|&tau| read.is_some() || self.sim.inside_step(Instant::new(tau)));
-        let xv_only = want & !(bit(var::x) | bit(var::v)) == 0;
+        let xv_only = want & !XV == 0;
         if let (Some(tau), true) = (ahead_tau, xv_only) {
             let lane = read.or_else(|| self.ahead.read(&self.sim, &self.scale, tau));
             if let Some(lane) = lane {
-                let (x, v) = self.ahead.mass(lane);
-                // A host's loop reading the position and velocity in flight: the values
-                // `Observed::write` gives, without computing anything else.
-                if want & bit(var::x) != 0 {
-                    values[var::x] = self.scale.length(x);
-                }
-                if want & bit(var::v) != 0 {
-                    values[var::v] = self.scale.velocity(v);
-                }
+                // A host reading the position and velocity in flight: nothing else computed.
+                self.write_xv(values, want, lane);
                 return Ok(());
             }
         }
@@ -893,6 +915,9 @@ pub(crate) const fn bit(i: usize) -> VarSet {
 
 /// Every variable.
 pub(crate) const ALL: VarSet = !0;
+
+/// The mass's position and velocity.
+const XV: VarSet = bit(var::x) | bit(var::v);
 
 /// Mass position and velocity, contact mode and well now (nondimensional).
 pub type Mass = (f64, f64, ContactMode, Well);
