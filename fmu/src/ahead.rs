@@ -83,14 +83,10 @@ impl Ahead {
     /// core's current step after its start, `None` otherwise (and when there is no pattern:
     /// then ask [`Simulator::mass_at`]).
     pub fn read(&mut self, sim: &Simulator, scale: &Scale, tau: f64) -> Option<usize> {
-        let next = self.next_points(scale)?;
-        let mut ts = [Instant::new(tau); LANES];
-        for (slot, &tau) in ts[1..].iter_mut().zip(&next) {
-            *slot = Instant::new(tau);
+        if !self.next_points(scale, tau) {
+            return None;
         }
-        self.mass = sim.flights_at(&ts);
-        self.tau[0] = tau;
-        self.tau[1..].copy_from_slice(&next);
+        sim.flights_at(&self.tau, &mut self.mass);
         self.key = sim.step_key();
         self.now = bits(sim.instant());
         self.next = 1;
@@ -105,29 +101,34 @@ impl Ahead {
         (self.mass.x[lane], self.mass.v[lane])
     }
 
-    /// `τ` of the host's next `LANES − 1` communication points after the end of its last step,
-    /// as the FMU will compute them from the host's arguments (`τ(t + h)`), if the host's steps
-    /// follow a pattern (see the module documentation).
-    fn next_points(&self, scale: &Scale) -> Option<[f64; LANES - 1]> {
+    /// Sets `tau` to `τ` now (`now`, the end of the host's last step) and of the host's next
+    /// `LANES − 1` communication points, as the FMU will compute them from the host's arguments
+    /// (`τ(t + h)`), if the host's steps follow a pattern (see the module documentation);
+    /// whether they do. The values read ahead before are dropped either way.
+    fn next_points(&mut self, scale: &Scale, now: f64) -> bool {
         let [(t0, h0), (t1, h1)] = self.steps;
         let end = t1 + h1;
-        let mut out = [0.0; LANES - 1];
+        // No values until they are computed for these points.
+        self.mass.flying = [false; LANES];
+        self.tau[0] = now;
         if h1 == h0 && t1 == t0 + h0 {
             let mut t = end;
-            for tau in &mut out {
+            for tau in &mut self.tau[1..] {
                 t += h1;
                 *tau = scale.tau(t);
             }
-            return Some(out);
+            return true;
         }
-        let (start, dt, n) = self.grid(t1, end)?;
+        let Some((start, dt, n)) = self.grid(t1, end) else {
+            return false;
+        };
         let mut t = end;
-        for (k, tau) in (1..).zip(&mut out) {
+        for (k, tau) in (1..).zip(&mut self.tau[1..]) {
             let next = start + (n + k) as f64 * dt;
             *tau = scale.tau(t + (next - t));
             t = next;
         }
-        Some(out)
+        true
     }
 
     /// `(start, Δt, n)` with `start + (n − 1)·Δt = t` and `start + n·Δt = end` as doubles, if

@@ -669,39 +669,37 @@ impl Simulator {
         }
     }
 
-    /// [`Simulator::mass_at`] at [`FLIGHT_LANES`] instants at once, for those in free flight
-    /// inside the current step after its start: where `flying[i]`, `x[i]` and `v[i]` are the
-    /// position and velocity of `mass_at(ts[i])` bit for bit (its mode is free flight, its well
-    /// [`Simulator::well`]; the step's series is evaluated in SIMD lanes, each lane with the
-    /// IEEE operations of the scalar evaluation, see [`crate::lanes`]). For the other instants
-    /// ask `mass_at`.
-    pub fn flights_at(&self, ts: &[Instant; FLIGHT_LANES]) -> Flights {
+    /// [`Simulator::mass_at`] at [`FLIGHT_LANES`] instants `Instant::new(taus[i])` at once, into
+    /// `out`, for those in free flight inside the current step after its start: where
+    /// `out.flying[i]`, `out.x[i]` and `out.v[i]` are the position and velocity of that
+    /// `mass_at` bit for bit (its mode is free flight, its well [`Simulator::well`]; the step's
+    /// series is evaluated in SIMD lanes, each lane with the IEEE operations of the scalar
+    /// evaluation, see [`crate::lanes`]). For the other instants ask `mass_at`.
+    pub fn flights_at(&self, taus: &[f64; FLIGHT_LANES], out: &mut Flights) {
         #[cfg(target_arch = "x86_64")]
         if std::arch::is_x86_feature_detected!("avx512f") {
             // SAFETY: the CPU has the feature, checked just above.
-            return unsafe { self.flights_at_avx512(ts) };
+            return unsafe { self.flights_at_avx512(taus, out) };
         }
-        self.flights_in_lanes(ts)
+        self.flights_in_lanes(taus, out)
     }
 
     /// [`Simulator::flights_at`] compiled for AVX-512 registers (the same operations).
     #[cfg(target_arch = "x86_64")]
     #[target_feature(enable = "avx512f")]
-    fn flights_at_avx512(&self, ts: &[Instant; FLIGHT_LANES]) -> Flights {
-        self.flights_in_lanes(ts)
+    fn flights_at_avx512(&self, taus: &[f64; FLIGHT_LANES], out: &mut Flights) {
+        self.flights_in_lanes(taus, out)
     }
 
     /// The body of [`Simulator::flights_at`], inlined into each of its compilations.
     #[inline(always)]
-    fn flights_in_lanes(&self, ts: &[Instant; FLIGHT_LANES]) -> Flights {
+    fn flights_in_lanes(&self, taus: &[f64; FLIGHT_LANES], out: &mut Flights) {
+        out.flying = [false; FLIGHT_LANES];
         if !self.live || self.step.riding || self.step.len <= 0.0 {
-            return Flights::default();
+            return;
         }
         // `inside_step` and `t.since(t0) > 0` in lanes, with the step's end computed once.
-        let (hi, lo) = (
-            F64x16(ts.map(|t| t.parts().0)),
-            F64x16(ts.map(|t| t.parts().1)),
-        );
+        let (hi, lo) = (F64x16(*taus), F64x16::splat(0.0));
         let at = |t: Instant| (F64x16::splat(t.parts().0), F64x16::splat(t.parts().1));
         let ((t0_hi, t0_lo), (now_hi, now_lo)) = (at(self.t0), at(self.now));
         let (end_hi, end_lo) = at(self.t0 + self.step.len);
@@ -711,14 +709,9 @@ impl Simulator {
         let not_before_now = F64x16::or(before_now.lt(zero), before_now.equal(zero));
         let before_end = time::since(end_hi, end_lo, hi, lo).gt(zero);
         let flying = F64x16::and(F64x16::and(not_before_now, before_end), s.gt(zero));
-        if !flying.contains(&true) {
-            return Flights::default();
-        }
-        let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
-        Flights {
-            x: x.0,
-            v: v.0,
-            flying,
+        if flying.contains(&true) {
+            let (x, v) = eval_d(&self.step.series.x[..=self.order + 1], s);
+            (out.x, out.v, out.flying) = (x.0, v.0, flying);
         }
     }
 

@@ -2,7 +2,7 @@
 //! advance inside the current step; `inside_step` says when that holds.
 
 use bistable_core::{
-    ContactMode, Instant, Params, Simulator, Sinusoid, SolverOptions, FLIGHT_LANES,
+    ContactMode, Flights, Instant, Params, Simulator, Sinusoid, SolverOptions, FLIGHT_LANES,
 };
 
 #[test]
@@ -50,9 +50,11 @@ fn flights_at_is_mass_at_in_each_lane_and_the_key_follows_the_step() {
         let mut sim = Simulator::new(params, plate.into(), SolverOptions::default()).unwrap();
         let (mut lanes, mut flights, mut keys_kept, mut keys_changed) = (0, 0, 0, 0);
         for k in 1..=5_000 {
-            let ts: [Instant; FLIGHT_LANES] =
-                std::array::from_fn(|i| Instant::new(f64::from(k) * 0.01 + i as f64 * 0.0123));
-            let batch = sim.flights_at(&ts);
+            let taus: [f64; FLIGHT_LANES] =
+                std::array::from_fn(|i| f64::from(k) * 0.01 + i as f64 * 0.0123);
+            let ts = taus.map(Instant::new);
+            let mut batch = Flights::default();
+            sim.flights_at(&taus, &mut batch);
             for (i, &t) in ts.iter().enumerate() {
                 lanes += 1;
                 let one = sim.mass_at(t);
