@@ -42,6 +42,9 @@ pub struct Ahead {
     mass: Flights,
     /// The lane after the last one read (the host's next point if it keeps to its pattern).
     next: usize,
+    /// The host read the mass since its last step ([`Ahead::host_reads`]), and did after the
+    /// step before.
+    reads: (bool, bool),
 }
 
 impl Ahead {
@@ -50,6 +53,19 @@ impl Ahead {
     pub fn host_step(&mut self, start: f64, t: f64, h: f64) {
         self.start = start;
         self.steps = [self.steps[1], (t, h)];
+        self.reads = (false, self.reads.0);
+    }
+
+    /// Records that the host read the mass's position or velocity.
+    #[inline]
+    pub fn host_reads(&mut self) {
+        self.reads.0 = true;
+    }
+
+    /// Whether the host read the mass after its previous step: it will likely read it after
+    /// this one, so the model's own reads may read ahead for it.
+    pub fn host_will_read(&self) -> bool {
+        self.reads.1
     }
 
     /// The lane holding the mass at `τ = tau` if it was read ahead ([`Ahead::mass`]).

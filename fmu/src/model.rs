@@ -436,11 +436,12 @@ impl Model {
                 ));
             }
         }
-        // On the stack: this runs after every step that runs the core.
+        // On the stack: this runs after every step that runs the core. For a host that reads
+        // the mass after each step, the mass now is read ahead with its next points.
         let mut buf = [0.0; 64];
         let out = &mut buf[..values.len()];
         out.copy_from_slice(values);
-        self.write_outputs(out)?;
+        self.write(out, ALL, self.ahead.host_will_read())?;
         if let Some(k) = out.iter().position(|v| !v.is_finite()) {
             return Err(format!(
                 "the FMU state gives the non-finite output {} = {}",
@@ -748,6 +749,9 @@ impl Model {
     /// evaluating only what they need; the mass may be read ahead at the host's next points
     /// ([`Ahead`]).
     pub fn write_some(&mut self, values: &mut [f64], want: VarSet) -> Result<(), String> {
+        if want & XV != 0 {
+            self.ahead.host_reads();
+        }
         // The common read of a host's loop, the position and velocity read ahead, kept short.
         if want & !XV == 0 {
             if let Some(lane) = self
@@ -792,17 +796,18 @@ impl Model {
         // (`Ahead`, keyed by that time: the pending one, or the core's when a step ran it to
         // the communication time).
         let at = self.ahead_at().filter(|_| ahead);
-        let read = at.and_then(|tau| self.ahead.lookup(&self.sim, tau));
-        let ahead_tau = at.filter(|&tau| read.is_some() || self.sim.inside_step(Instant::new(tau)));
+        let mut read = at.and_then(|tau| self.ahead.lookup(&self.sim, tau));
         let xv_only = want & !XV == 0;
-        if let (Some(tau), true) = (ahead_tau, xv_only) {
-            let lane = read.or_else(|| self.ahead.read(&self.sim, &self.scale, tau));
-            if let Some(lane) = lane {
-                // A host reading the position and velocity in flight: nothing else computed.
-                self.write_xv(values, want, lane);
-                return Ok(());
-            }
+        if let (Some(tau), None, true) = (at, read, xv_only) {
+            // `Some` only at an instant in flight inside the core's step.
+            read = self.ahead.read(&self.sim, &self.scale, tau);
         }
+        if let (Some(lane), true) = (read, xv_only) {
+            // A host reading the position and velocity in flight: nothing else computed.
+            self.write_xv(values, want, lane);
+            return Ok(());
+        }
+        let ahead_tau = at.filter(|&tau| read.is_some() || self.sim.inside_step(Instant::new(tau)));
         let now = match ahead_tau {
             Some(tau) => Instant::new(tau),
             None => {
