@@ -1559,13 +1559,14 @@ mod tests {
                     t = tc + h;
                 }
                 // The patterns are read ahead at most points in flight (one read per Taylor
-                // step evaluates the next ones); the irregular host never is.
+                // step evaluates the next ones); the irregular host's points only where a few
+                // of them happen to lie on a grid (served and checked like the others).
                 let expect_hits = name != "irregular";
                 assert!(
                     if expect_hits {
                         hits * 2 > reads
                     } else {
-                        hits == 0
+                        hits * 100 < reads
                     },
                     "{name}, Omega {omega}: {hits} of {reads} reads ahead"
                 );
