@@ -14,8 +14,10 @@
 //! A value is used only for the exact `τ` and the Taylor step ([`StepKey`]) it was computed for,
 //! so a point the pattern does not predict is evaluated as before: every value is the one of
 //! [`Simulator::mass_at`], bit for bit, whatever the host does. A host that does not read the
-//! mass costs nothing here (the work is done on a read); one that reads it at points of no
-//! pattern costs one check of the step sizes per read.
+//! mass costs only the recording of its step arguments (the work is done on a read, or by the
+//! model's own check of the outputs after a step that ran the core, when the host read after
+//! its previous step); one that reads it at points of no pattern costs one check of the step
+//! sizes per read.
 
 use std::cmp::Ordering;
 
