@@ -48,7 +48,7 @@ const GAIN: f64 = 8.0;
 pub const MAX_SAMPLES: usize = MAX_NODES + 1;
 
 /// Plate position and velocity at an instant (nondimensional).
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub struct Sample {
     /// Instant of the sample.
     pub t: Instant,
@@ -59,10 +59,20 @@ pub struct Sample {
 }
 
 /// The newest samples of a sampled plate, oldest first; `joined[i]` tells whether sample `i`
-/// continues sample `i − 1` smoothly (see the module documentation).
-#[derive(Debug, Clone, Copy, PartialEq, Default)]
+/// continues sample `i − 1` smoothly (see the module documentation). Invariants: the first `n`
+/// slots hold the samples, strictly increasing in time, and `joined[0]` is `false`.
+#[derive(Debug, Clone, Copy, Default)]
 pub struct SampleHistory {
-    samples: [Option<(Sample, bool)>; MAX_SAMPLES],
+    samples: [Sample; MAX_SAMPLES],
+    joined: [bool; MAX_SAMPLES],
+    n: usize,
+}
+
+impl PartialEq for SampleHistory {
+    /// The same stored samples and flags (the unused slots do not count).
+    fn eq(&self, other: &Self) -> bool {
+        self.entries().eq(other.entries())
+    }
 }
 
 /// Why a sample was refused.
@@ -91,25 +101,25 @@ impl SampleHistory {
             return None;
         }
         let mut h = Self::new();
-        for (slot, e) in h.samples.iter_mut().zip(entries) {
-            *slot = Some(*e);
+        for (i, &(s, joined)) in entries.iter().enumerate() {
+            (h.samples[i], h.joined[i]) = (s, joined);
         }
+        h.n = entries.len();
         Some(h)
     }
 
     /// The stored samples with their `joined` flags, oldest first.
     pub fn entries(&self) -> impl Iterator<Item = (Sample, bool)> + '_ {
-        self.samples.iter().flatten().copied()
+        self.samples[..self.n]
+            .iter()
+            .copied()
+            .zip(self.joined[..self.n].iter().copied())
     }
 
-    /// Number of stored samples.
-    fn len(&self) -> usize {
-        self.samples.iter().flatten().count()
-    }
 
     /// The newest sample.
     pub fn newest(&self) -> Option<Sample> {
-        self.entries().last().map(|e| e.0)
+        self.n.checked_sub(1).map(|i| self.samples[i])
     }
 
     /// Adds a sample after the newest one (the oldest beyond [`MAX_SAMPLES`] is dropped). A
@@ -122,8 +132,8 @@ impl SampleHistory {
         if !s.zdot.is_finite() {
             return Err(refuse("plate_sample_zdot", s.zdot, "must be finite"));
         }
-        if let Some(n) = self.newest().filter(|p| p.t == s.t).map(|_| self.len()) {
-            self.samples[n - 1] = None;
+        if self.newest().is_some_and(|p| p.t == s.t) {
+            self.n -= 1;
         }
         let joined = match self.newest() {
             Some(prev) => {
@@ -139,17 +149,17 @@ impl SampleHistory {
             }
             None => false,
         };
-        let n = self.len();
-        if n == MAX_SAMPLES {
-            self.samples.rotate_left(1);
-            self.samples[MAX_SAMPLES - 1] = None;
+        if self.n == MAX_SAMPLES {
+            // From a copy: a move within the array would be a call to `memmove`.
+            let (samples, joined) = (self.samples, self.joined);
+            self.samples[..MAX_SAMPLES - 1].copy_from_slice(&samples[1..]);
+            self.joined[..MAX_SAMPLES - 1].copy_from_slice(&joined[1..]);
+            self.n -= 1;
         }
-        let slot = n.min(MAX_SAMPLES - 1);
-        self.samples[slot] = Some((s, joined));
+        (self.samples[self.n], self.joined[self.n]) = (s, joined);
+        self.n += 1;
         // The oldest kept sample starts the history.
-        if let Some(first) = self.samples[0].as_mut() {
-            first.1 = false;
-        }
+        self.joined[0] = false;
         Ok(())
     }
 
@@ -157,19 +167,15 @@ impl SampleHistory {
     /// ones while they are joined and spaced within `[h/4, 4h]`, `h = end − newest`.
     fn usable(&self, end: Instant) -> Newest {
         let mut out = Newest::default();
-        // The stored samples fill the first slots, oldest first.
-        let all = &self.samples[..self.len()];
-        let Some(&Some((newest, _))) = all.last() else {
+        let Some(newest) = self.newest() else {
             return out;
         };
         let h = end.since(newest.t);
         out.push(newest);
-        for i in (1..all.len()).rev() {
-            let (Some((newer, joined)), Some((older, _))) = (all[i], all[i - 1]) else {
-                break;
-            };
+        for i in (1..self.n).rev() {
+            let (newer, older) = (self.samples[i], self.samples[i - 1]);
             let spacing = newer.t.since(older.t);
-            if !(joined && spacing >= 0.25 * h && spacing <= 4.0 * h) {
+            if !(self.joined[i] && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
             }
             out.push(older);
@@ -195,17 +201,22 @@ impl SampleHistory {
             // differences (the table of the first nodes is a part of the table of more).
             let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
             let fresh;
-            let table = match memo.table_of(older) {
-                Some(t) => t,
+            let (table, kept) = match memo.table_of(older) {
+                Some((t, kept)) => (t, kept),
                 None => {
                     fresh = Table::of(older, older[0].t);
-                    &fresh
+                    (&fresh, None)
                 }
             };
             let s = newest.t.since(older[0].t);
             for m in 1..=checkable {
-                let c = table.monomials(2 * m);
-                let (z, zd) = eval(&c, s);
+                let c = match kept {
+                    Some(c) if m == checkable => *c,
+                    _ => table.monomials(2 * m),
+                };
+                // The coefficients above degree 2m − 1 are zeros, which leave Horner's sums as
+                // they start.
+                let (z, zd) = eval(&c[..2 * m], s);
                 let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
                 if m == 1 || miss <= best.0 / GAIN {
                     best = (miss, m);
@@ -230,8 +241,8 @@ impl SampleHistory {
         now: (f64, f64),
         memo: &mut PieceMemo,
     ) -> Result<PolyPiece, ParamError> {
-        let nodes = self.nodes_with(end, memo);
-        let nodes = nodes.as_slice();
+        let newest = self.nodes_with(end, memo);
+        let nodes = newest.as_slice();
         let Some(first) = nodes.first() else {
             return Err(refuse(
                 "plate_samples",
@@ -250,7 +261,7 @@ impl SampleHistory {
         }
         let table = Table::of(nodes, start);
         let mut c = table.monomials(2 * nodes.len());
-        memo.keep(nodes, table);
+        memo.keep(&newest, table, c);
         let (z_now, zd_now) = now;
         let (d0, d1) = (z_now - c[0], zd_now - c[1]);
         // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
@@ -266,24 +277,10 @@ impl SampleHistory {
 }
 
 /// Up to [`MAX_SAMPLES`] samples, newest first.
-#[derive(Clone, Copy)]
+#[derive(Clone, Copy, Default)]
 struct Newest {
     s: [Sample; MAX_SAMPLES],
     n: usize,
-}
-
-impl Default for Newest {
-    fn default() -> Self {
-        let none = Sample {
-            t: Instant::new(0.0),
-            z: 0.0,
-            zdot: 0.0,
-        };
-        Self {
-            s: [none; MAX_SAMPLES],
-            n: 0,
-        }
-    }
 }
 
 impl Newest {
@@ -311,7 +308,7 @@ fn joins(a: &Sample, b: &Sample, h: f64) -> bool {
 }
 
 /// Value and first derivative at `s` of `Σ c_k s^k`.
-fn eval(c: &[f64; MAX_POLY_DEGREE + 1], s: f64) -> (f64, f64) {
+fn eval(c: &[f64], s: f64) -> (f64, f64) {
     let (mut p, mut d) = (0.0, 0.0);
     for &ck in c.iter().rev() {
         d = d * s + p;
@@ -335,13 +332,16 @@ fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
 pub struct PieceMemo {
     nodes: Newest,
     table: Table,
+    /// The monomial coefficients of the interpolant through all of `nodes`.
+    monomials: [f64; MAX_POLY_DEGREE + 1],
 }
 
 impl PieceMemo {
     /// The table of `nodes` (from the first one) if it is a part of the one kept: the same
     /// samples, bit for bit (the table of the first `m` nodes is the start of the table of
-    /// more).
-    fn table_of(&self, nodes: &[Sample]) -> Option<&Table> {
+    /// more); with it, the monomial coefficients of the interpolant through all of `nodes` if
+    /// they are all the nodes kept.
+    fn table_of(&self, nodes: &[Sample]) -> Option<(&Table, Option<&[f64; MAX_POLY_DEGREE + 1]>)> {
         let kept = self.nodes.as_slice();
         let bits = |s: &Sample| {
             let (hi, lo) = s.t.parts();
@@ -349,13 +349,16 @@ impl PieceMemo {
         };
         let same =
             kept.len() >= nodes.len() && kept.iter().zip(nodes).all(|(a, b)| bits(a) == bits(b));
-        same.then_some(&self.table)
+        let all = kept.len() == nodes.len();
+        same.then_some((&self.table, all.then_some(&self.monomials)))
     }
 
-    fn keep(&mut self, nodes: &[Sample], table: Table) {
-        self.nodes.s[..nodes.len()].copy_from_slice(nodes);
-        self.nodes.n = nodes.len();
+    /// Keeps `table` of `nodes` and `monomials`, the coefficients of the interpolant through
+    /// all of them.
+    fn keep(&mut self, nodes: &Newest, table: Table, monomials: [f64; MAX_POLY_DEGREE + 1]) {
+        self.nodes = *nodes;
         self.table = table;
+        self.monomials = monomials;
     }
 }
 
