@@ -116,7 +116,6 @@ impl SampleHistory {
             .zip(self.joined[..self.n].iter().copied())
     }
 
-
     /// The newest sample.
     pub fn newest(&self) -> Option<Sample> {
         self.n.checked_sub(1).map(|i| self.samples[i])
