@@ -585,23 +585,34 @@ impl Instance {
 
     /// Computes the variables of `missing` (outputs, state derivatives) into `values`; in
     /// initialization mode, every one from a model built at the start time from the current
-    /// values.
+    /// values. Inline for a co-simulation model: a host's read after each step (about 2 ns
+    /// of a 22 ns read out of line).
+    #[inline]
     fn refresh_outputs(&mut self, missing: VarSet) -> Result<(), String> {
-        let cannot = |e: String| format!("outputs cannot be computed: {e}");
-        match (&mut self.model, &self.me, self.interface) {
-            (Some(model), _, _) => {
+        match self.model.as_mut() {
+            Some(model) => {
                 model.write_some(&mut self.values, missing)?;
                 self.fresh |= missing;
+                Ok(())
             }
-            (_, Some(me), _) => {
+            None => self.refresh_without_model(missing),
+        }
+    }
+
+    /// [`Instance::refresh_outputs`] without a co-simulation model.
+    #[inline(never)]
+    fn refresh_without_model(&mut self, missing: VarSet) -> Result<(), String> {
+        let cannot = |e: String| format!("outputs cannot be computed: {e}");
+        match (&self.me, self.interface) {
+            (Some(me), _) => {
                 me.write_some(&mut self.values, missing);
                 self.fresh |= missing;
             }
-            (None, None, Interface::CoSimulation) => {
+            (None, Interface::CoSimulation) => {
                 self.start_model().map_err(cannot)?;
                 self.fresh = ALL;
             }
-            (None, None, Interface::ModelExchange) => {
+            (None, Interface::ModelExchange) => {
                 Me::start(&self.values, self.start_time)
                     .map_err(cannot)?
                     .write_outputs(&mut self.values);
