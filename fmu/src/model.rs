@@ -522,8 +522,9 @@ impl Model {
         }
         let now = self.sim.instant();
         let (z, zdot, _) = self.sim.plate().motion(now);
-        let Ok((piece, history)) =
-            self.external_piece(now, tau_end, (z, zdot), values, derivatives)
+        let mut history = self.history;
+        let Ok(piece) =
+            self.external_piece(now, tau_end, (z, zdot), values, derivatives, &mut history)
         else {
             return false;
         };
@@ -538,7 +539,7 @@ impl Model {
     }
 
     /// The external plate over `[now, tau_end]` from the inputs (the plate is at `(z, zdot)`
-    /// now) and the sample history with the inputs' sample added.
+    /// now), after the inputs' sample is added to `history`.
     fn external_piece(
         &mut self,
         now: Instant,
@@ -546,25 +547,24 @@ impl Model {
         (z, zdot): (f64, f64),
         values: &[f64],
         derivatives: &PlateInputs,
-    ) -> Result<(PolyPiece, SampleHistory), String> {
+        history: &mut SampleHistory,
+    ) -> Result<PolyPiece, String> {
         let inputs = plate_inputs(values, derivatives);
         let sample = Sample {
             t: now,
             z: self.scale.plate_coefficient(0, values[var::z_in]),
             zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
         };
-        let mut history = self.history;
         history.push(sample).map_err(|e| describe_param(&e))?;
         let derivatives_given = inputs[2..].iter().any(Option::is_some);
         let scheme = Reconstruction::of(values[var::plate_reconstruction]);
-        let piece = if derivatives_given || scheme != Some(Reconstruction::Hermite) {
-            plate_piece(&self.scale, now, tau_end, &inputs, Some(z))?
+        if derivatives_given || scheme != Some(Reconstruction::Hermite) {
+            plate_piece(&self.scale, now, tau_end, &inputs, Some(z))
         } else {
             history
                 .piece_with(Instant::new(tau_end), (z, zdot), &mut self.memo)
-                .map_err(|e| describe_param(&e))?
-        };
-        Ok((piece, history))
+                .map_err(|e| describe_param(&e))
+        }
     }
 
     /// What a step to `t_end` (s) asks for: the end in core time `τ`, the requested `(Ω, V)`,
@@ -622,8 +622,16 @@ impl Model {
         match self.mode {
             ShakerMode::External => {
                 let st = self.sim.state();
-                let (piece, history) = self
-                    .external_piece(now, tau_end, (st.z, st.zdot), values, derivatives)
+                let mut history = self.history;
+                let piece = self
+                    .external_piece(
+                        now,
+                        tau_end,
+                        (st.z, st.zdot),
+                        values,
+                        derivatives,
+                        &mut history,
+                    )
                     .map_err(StepFailure::Refused)?;
                 self.history = history;
                 if let Err(e) = self.sim.set_plate(piece.into()) {

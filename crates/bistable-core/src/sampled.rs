@@ -164,6 +164,7 @@ impl SampleHistory {
 
     /// The samples usable for a piece ending at `end`, newest first: the newest one, then older
     /// ones while they are joined and spaced within `[h/4, 4h]`, `h = end − newest`.
+    #[inline(always)]
     fn usable(&self, end: Instant) -> Newest {
         let mut out = Newest::default();
         let Some(newest) = self.newest() else {
@@ -186,43 +187,8 @@ impl SampleHistory {
     /// documentation for the choice of their number).
     #[cfg(test)]
     fn nodes(&self, end: Instant) -> Newest {
-        self.nodes_with(end, &PieceMemo::default())
-    }
-
-    /// [`SampleHistory::nodes`], with the table of the older samples from `memo` when it holds
-    /// it.
-    fn nodes_with(&self, end: Instant, memo: &PieceMemo) -> Newest {
         let mut usable = self.usable(end);
-        let checkable = usable.len().saturating_sub(1).min(MAX_NODES);
-        let mut best = (f64::INFINITY, 1);
-        if checkable > 0 {
-            // The Hermite polynomials through the older samples share one table of divided
-            // differences (the table of the first nodes is a part of the table of more).
-            let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
-            let fresh;
-            let (table, kept) = match memo.table_of(older) {
-                Some((t, kept)) => (t, kept),
-                None => {
-                    fresh = Table::of(older, older[0].t);
-                    (&fresh, None)
-                }
-            };
-            let s = newest.t.since(older[0].t);
-            for m in 1..=checkable {
-                let c = match kept {
-                    Some(c) if m == checkable => *c,
-                    _ => table.monomials(2 * m),
-                };
-                // The coefficients above degree 2m − 1 are zeros, which leave Horner's sums as
-                // they start.
-                let (z, zd) = eval(&c[..2 * m], s);
-                let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
-                if m == 1 || miss <= best.0 / GAIN {
-                    best = (miss, m);
-                }
-            }
-        }
-        usable.n = usable.n.min(best.1);
+        usable.n = order(&usable, &PieceMemo::default());
         usable
     }
 
@@ -240,7 +206,8 @@ impl SampleHistory {
         now: (f64, f64),
         memo: &mut PieceMemo,
     ) -> Result<PolyPiece, ParamError> {
-        let newest = self.nodes_with(end, memo);
+        let mut newest = self.usable(end);
+        newest.n = order(&newest, memo);
         let nodes = newest.as_slice();
         let Some(first) = nodes.first() else {
             return Err(refuse(
@@ -275,14 +242,60 @@ impl SampleHistory {
     }
 }
 
-/// Up to [`MAX_SAMPLES`] samples, newest first.
-#[derive(Clone, Copy, Default)]
-struct Newest {
-    s: [Sample; MAX_SAMPLES],
+/// How many of the `usable` samples (newest first, [`SampleHistory::usable`]) a piece is built
+/// from, with the table of the older samples from `memo` when it holds it (see the module
+/// documentation for the choice).
+#[inline(always)]
+fn order(usable: &Newest, memo: &PieceMemo) -> usize {
+    let checkable = usable.len().saturating_sub(1).min(MAX_NODES);
+    let mut best = (f64::INFINITY, 1);
+    if checkable > 0 {
+        // The Hermite polynomials through the older samples share one table of divided
+        // differences (the table of the first nodes is a part of the table of more).
+        let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
+        let fresh;
+        let (table, kept) = match memo.table_of(older) {
+            Some((t, kept)) => (t, kept),
+            None => {
+                fresh = Table::of(older, older[0].t);
+                (&fresh, None)
+            }
+        };
+        let s = newest.t.since(older[0].t);
+        for m in 1..=checkable {
+            let c = match kept {
+                Some(c) if m == checkable => *c,
+                _ => table.monomials(2 * m),
+            };
+            // The coefficients above degree 2m − 1 are zeros, which leave Horner's sums as
+            // they start.
+            let (z, zd) = eval(&c[..2 * m], s);
+            let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
+            if m == 1 || miss <= best.0 / GAIN {
+                best = (miss, m);
+            }
+        }
+    }
+    usable.n.min(best.1)
+}
+
+/// Up to `N` samples, newest first.
+#[derive(Clone, Copy)]
+struct Newest<const N: usize = MAX_SAMPLES> {
+    s: [Sample; N],
     n: usize,
 }
 
-impl Newest {
+impl<const N: usize> Default for Newest<N> {
+    fn default() -> Self {
+        Self {
+            s: [Sample::default(); N],
+            n: 0,
+        }
+    }
+}
+
+impl<const N: usize> Newest<N> {
     fn push(&mut self, s: Sample) {
         self.s[self.n] = s;
         self.n += 1;
@@ -329,7 +342,8 @@ fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
 /// pieces).
 #[derive(Clone, Copy, Default)]
 pub struct PieceMemo {
-    nodes: Newest,
+    /// At most [`MAX_NODES`] (a piece's nodes), so that copies of it stay small.
+    nodes: Newest<MAX_NODES>,
     table: Table,
     /// The monomial coefficients of the interpolant through all of `nodes`.
     monomials: [f64; MAX_POLY_DEGREE + 1],
@@ -355,7 +369,10 @@ impl PieceMemo {
     /// Keeps `table` of `nodes` and `monomials`, the coefficients of the interpolant through
     /// all of them.
     fn keep(&mut self, nodes: &Newest, table: Table, monomials: [f64; MAX_POLY_DEGREE + 1]) {
-        self.nodes = *nodes;
+        self.nodes = Newest {
+            s: std::array::from_fn(|i| nodes.s[i]),
+            n: nodes.n.min(MAX_NODES),
+        };
         self.table = table;
         self.monomials = monomials;
     }
