@@ -247,7 +247,11 @@ const MAGIC: u64 = 0x6269_7374_6162_6c65;
 /// Outcome of a call: a status to return, or a refusal to log and return as `fmi2Error`.
 pub type Outcome = Result<fmi2Status, String>;
 
-/// One instance of the FMU.
+/// One instance of the FMU. Aligned to a cache line, so that where the host's heap puts it does
+/// not move its fields across cache lines: unaligned, the same library took 43.8 to 45.3 ns per
+/// `fmi2DoStep` + `fmi2GetReal(x, v)` depending only on the path it was loaded from, aligned
+/// 44.1 to 44.3 ns (C host bench, 21 rounds).
+#[repr(align(64))]
 pub struct Instance {
     magic: u64,
     name: CString,
