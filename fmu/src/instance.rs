@@ -249,8 +249,8 @@ pub type Outcome = Result<fmi2Status, String>;
 
 /// One instance of the FMU. Aligned to a cache line, so that where the host's heap puts it does
 /// not move its fields across cache lines: unaligned, the same library took 43.8 to 45.3 ns per
-/// `fmi2DoStep` + `fmi2GetReal(x, v)` depending only on the path it was loaded from, aligned
-/// 44.1 to 44.3 ns (C host bench, 21 rounds).
+/// `fmi2DoStep` + `fmi2GetReal(x, v)` depending only on the path it was loaded from; aligned,
+/// 44.1 to 44.7 ns by either path (C host bench, 21 rounds; `docs/benchmarks.md`).
 #[repr(align(64))]
 pub struct Instance {
     magic: u64,
@@ -589,8 +589,8 @@ impl Instance {
 
     /// Computes the variables of `missing` (outputs, state derivatives) into `values`; in
     /// initialization mode, every one from a model built at the start time from the current
-    /// values. Inline for a co-simulation model: a host's read after each step (about 2 ns
-    /// of a 22 ns read out of line).
+    /// values. Inline for a co-simulation model, which a host may read after every step: out of
+    /// line, the call cost about 2 ns of a 22 ns read.
     #[inline]
     fn refresh_outputs(&mut self, missing: VarSet) -> Result<(), String> {
         match self.model.as_mut() {
