@@ -763,9 +763,11 @@ impl Model {
         self.write(values, want, true)
     }
 
-    /// The time (`τ`) the mass may be read ahead at, see [`Model::write`].
+    /// The communication time (`τ`) the outputs are taken at without advancing the core, when
+    /// it is inside the core's step (see [`Model::write`]): the pending one, or the core's when
+    /// a step ran it there (a time the host's points can give exactly).
     #[inline]
-    fn ahead_at(&self) -> Option<f64> {
+    fn communication_tau(&self) -> Option<f64> {
         self.pending.or_else(|| {
             let (hi, lo) = self.sim.instant().parts();
             (lo.to_bits() == 0).then_some(hi)
@@ -792,10 +794,12 @@ impl Model {
         // mass there may have been read ahead, or is read now with the host's next points
         // (`Ahead`, keyed by that time: the pending one, or the core's when a step ran it to
         // the communication time).
-        let at = self.ahead_at().filter(|_| ahead);
-        let mut read = at.and_then(|tau| self.ahead.lookup(&self.sim, tau));
+        let at = self.communication_tau();
+        // Where the mass may be read ahead (only for a host's read).
+        let key = at.filter(|_| ahead);
+        let mut read = key.and_then(|tau| self.ahead.lookup(&self.sim, tau));
         let xv_only = want & !XV == 0;
-        if let (Some(tau), None, true) = (at, read, xv_only) {
+        if let (Some(tau), None, true) = (key, read, xv_only) {
             // `Some` only at an instant in flight inside the core's step.
             read = self.ahead.read(&self.sim, &self.scale, tau);
         }
@@ -813,7 +817,7 @@ impl Model {
             }
         };
         // Not read again when the position and velocity alone were asked for just above.
-        let fill = ahead_tau.filter(|_| !xv_only);
+        let fill = ahead_tau.filter(|_| ahead && !xv_only);
         let (sim, scale) = (&self.sim, &self.scale);
         let ahead = RefCell::new(&mut self.ahead);
         let stats = sim.stats();
