@@ -124,6 +124,7 @@ impl SampleHistory {
     /// Adds a sample after the newest one (the oldest beyond [`MAX_SAMPLES`] is dropped). A
     /// sample at the instant of the newest one replaces it: the host's latest values for that
     /// instant (a step that made no progress, e.g. an FMI 3.0 early return at its start).
+    #[inline(always)]
     pub fn push(&mut self, s: Sample) -> Result<(), ParamError> {
         if !s.z.is_finite() {
             return Err(refuse("plate_sample_z", s.z, "must be finite"));
@@ -162,34 +163,65 @@ impl SampleHistory {
         Ok(())
     }
 
-    /// The samples usable for a piece ending at `end`, newest first: the newest one, then older
-    /// ones while they are joined and spaced within `[h/4, 4h]`, `h = end − newest`.
+    /// How many of the newest samples a piece of length `h` after the newest one may be built
+    /// from: the newest one, then older ones while they are joined and spaced within
+    /// `[h/4, 4h]` (zero for an empty history).
     #[inline(always)]
-    fn usable(&self, end: Instant) -> Newest {
-        let mut out = Newest::default();
-        let Some(newest) = self.newest() else {
-            return out;
-        };
-        let h = end.since(newest.t);
-        out.push(newest);
+    fn usable(&self, h: f64) -> usize {
+        let mut k = self.n.min(1);
         for i in (1..self.n).rev() {
-            let (newer, older) = (self.samples[i], self.samples[i - 1]);
-            let spacing = newer.t.since(older.t);
+            let spacing = self.samples[i].t.since(self.samples[i - 1].t);
             if !(self.joined[i] && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
             }
-            out.push(older);
+            k += 1;
         }
-        out
+        k
     }
 
-    /// The samples a piece ending at `end` is built from, newest first (see the module
-    /// documentation for the choice of their number).
+    /// [`SampleHistory::usable`] for a piece ending at `end`.
     #[cfg(test)]
-    fn nodes(&self, end: Instant) -> Newest {
-        let mut usable = self.usable(end);
-        usable.n = order(&usable, &PieceMemo::default());
-        usable
+    fn usable_at(&self, end: Instant) -> usize {
+        self.newest().map_or(0, |s| self.usable(end.since(s.t)))
+    }
+
+    /// How many of the newest samples a piece ending at `end` is built from (see the module
+    /// documentation for the choice).
+    #[cfg(test)]
+    fn nodes(&self, end: Instant) -> usize {
+        self.order(self.usable_at(end), &PieceMemo::default())
+    }
+
+    /// How many of the `usable` newest samples a piece is built from, with the table of the
+    /// older samples from `memo` when it holds it (see the module documentation for the
+    /// choice).
+    #[inline(always)]
+    fn order(&self, usable: usize, memo: &PieceMemo) -> usize {
+        let checkable = usable.saturating_sub(1).min(MAX_NODES);
+        let mut best = (f64::INFINITY, 1);
+        if checkable > 0 {
+            // The older samples' table (the table of the first nodes is a part of the table of
+            // more), from the last piece when it was built on them.
+            let n = self.n;
+            let (newest, older) = (self.samples[n - 1], &self.samples[n - 1 - checkable..n - 1]);
+            let fresh;
+            let table = match memo.table_of(older) {
+                Some(t) => t,
+                None => {
+                    fresh = Table::of(older);
+                    &fresh
+                }
+            };
+            let s = newest.t.since(older[checkable - 1].t);
+            let predicted = table.predictions(s, checkable);
+            for (m, &(z, zd)) in (1..=checkable).zip(&predicted) {
+                let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
+                if m == 1 || miss <= best.0 / GAIN {
+                    best = (miss, m);
+                }
+            }
+        }
+        usable.min(best.1)
     }
 
     /// The plate over `[newest sample, end]`, starting at the plate's current position and
@@ -206,17 +238,14 @@ impl SampleHistory {
         now: (f64, f64),
         memo: &mut PieceMemo,
     ) -> Result<PolyPiece, ParamError> {
-        let mut newest = self.usable(end);
-        newest.n = order(&newest, memo);
-        let nodes = newest.as_slice();
-        let Some(first) = nodes.first() else {
+        let Some(newest) = self.newest() else {
             return Err(refuse(
                 "plate_samples",
                 0.0,
                 "at least one sample is needed",
             ));
         };
-        let start = first.t;
+        let start = newest.t;
         let h = end.since(start);
         if h.is_nan() || h <= 0.0 {
             return Err(refuse(
@@ -225,88 +254,24 @@ impl SampleHistory {
                 "end must be after the newest sample",
             ));
         }
-        let table = Table::of(nodes, start);
-        let mut c = table.monomials(2 * nodes.len());
-        memo.keep(&newest, table, c);
+        let m = self.order(self.usable(h), memo);
+        let nodes = &self.samples[self.n - m..self.n];
+        let table = Table::of(nodes);
+        let mut c = table.monomials(2 * m);
+        memo.keep(nodes, table);
         let (z_now, zd_now) = now;
         let (d0, d1) = (z_now - c[0], zd_now - c[1]);
         // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
-        let c2 = c[2] - 3.0 * d0 / (h * h) - 2.0 * d1 / h;
-        let c3 = c[3] + 2.0 * d0 / (h * h * h) + d1 / (h * h);
+        let r = 1.0 / h;
+        let r2 = r * r;
+        let c2 = c[2] - 3.0 * d0 * r2 - 2.0 * d1 * r;
+        let c3 = c[3] + 2.0 * d0 * (r2 * r) + d1 * r2;
         if c2.is_finite() && c3.is_finite() {
             (c[2], c[3]) = (c2, c3);
         }
         // Exactly where the plate is (`c0 + δ0` may round away from it).
         (c[0], c[1]) = (z_now, zd_now);
         PolyPiece::new(start, end, &c)
-    }
-}
-
-/// How many of the `usable` samples (newest first, [`SampleHistory::usable`]) a piece is built
-/// from, with the table of the older samples from `memo` when it holds it (see the module
-/// documentation for the choice).
-#[inline(always)]
-fn order(usable: &Newest, memo: &PieceMemo) -> usize {
-    let checkable = usable.len().saturating_sub(1).min(MAX_NODES);
-    let mut best = (f64::INFINITY, 1);
-    if checkable > 0 {
-        // The Hermite polynomials through the older samples share one table of divided
-        // differences (the table of the first nodes is a part of the table of more).
-        let (newest, older) = (usable.s[0], &usable.s[1..=checkable]);
-        let fresh;
-        let (table, kept) = match memo.table_of(older) {
-            Some((t, kept)) => (t, kept),
-            None => {
-                fresh = Table::of(older, older[0].t);
-                (&fresh, None)
-            }
-        };
-        let s = newest.t.since(older[0].t);
-        for m in 1..=checkable {
-            let c = match kept {
-                Some(c) if m == checkable => *c,
-                _ => table.monomials(2 * m),
-            };
-            // The coefficients above degree 2m − 1 are zeros, which leave Horner's sums as
-            // they start.
-            let (z, zd) = eval(&c[..2 * m], s);
-            let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
-            if m == 1 || miss <= best.0 / GAIN {
-                best = (miss, m);
-            }
-        }
-    }
-    usable.n.min(best.1)
-}
-
-/// Up to `N` samples, newest first.
-#[derive(Clone, Copy)]
-struct Newest<const N: usize = MAX_SAMPLES> {
-    s: [Sample; N],
-    n: usize,
-}
-
-impl<const N: usize> Default for Newest<N> {
-    fn default() -> Self {
-        Self {
-            s: [Sample::default(); N],
-            n: 0,
-        }
-    }
-}
-
-impl<const N: usize> Newest<N> {
-    fn push(&mut self, s: Sample) {
-        self.s[self.n] = s;
-        self.n += 1;
-    }
-
-    fn len(&self) -> usize {
-        self.n
-    }
-
-    fn as_slice(&self) -> &[Sample] {
-        &self.s[..self.n]
     }
 }
 
@@ -319,21 +284,12 @@ fn joins(a: &Sample, b: &Sample, h: f64) -> bool {
     defect <= 0.25 * scale + ulps
 }
 
-/// Value and first derivative at `s` of `Σ c_k s^k`.
-fn eval(c: &[f64], s: f64) -> (f64, f64) {
-    let (mut p, mut d) = (0.0, 0.0);
-    for &ck in c.iter().rev() {
-        d = d * s + p;
-        p = p * s + ck;
-    }
-    (p, d)
-}
-
-/// Monomial coefficients in `s = τ − origin` of the Hermite polynomial through `(z, ż)` at
-/// each node (degree `2·nodes − 1`), by divided differences on doubled nodes.
+/// Monomial coefficients in `s = τ − t_0` (the first node's instant) of the Hermite polynomial
+/// through `(z, ż)` at each node (degree `2·nodes − 1`), by divided differences on doubled
+/// nodes.
 #[cfg(test)]
-fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
-    Table::of(nodes, origin).monomials(2 * nodes.len())
+fn hermite(nodes: &[Sample]) -> [f64; MAX_POLY_DEGREE + 1] {
+    Table::of(nodes).monomials(2 * nodes.len())
 }
 
 /// The table of divided differences of the nodes of the last piece built
@@ -342,43 +298,40 @@ fn hermite(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
 /// pieces).
 #[derive(Clone, Copy, Default)]
 pub struct PieceMemo {
-    /// At most [`MAX_NODES`] (a piece's nodes), so that copies of it stay small.
-    nodes: Newest<MAX_NODES>,
+    /// The last piece's nodes, oldest first: the first `n` entries.
+    nodes: [Sample; MAX_NODES],
+    n: usize,
     table: Table,
-    /// The monomial coefficients of the interpolant through all of `nodes`.
-    monomials: [f64; MAX_POLY_DEGREE + 1],
 }
 
 impl PieceMemo {
-    /// The table of `nodes` (from the first one) if it is a part of the one kept: the same
-    /// samples, bit for bit (the table of the first `m` nodes is the start of the table of
-    /// more); with it, the monomial coefficients of the interpolant through all of `nodes` if
-    /// they are all the nodes kept.
-    fn table_of(&self, nodes: &[Sample]) -> Option<(&Table, Option<&[f64; MAX_POLY_DEGREE + 1]>)> {
-        let kept = self.nodes.as_slice();
+    /// The table of `nodes` (oldest first) if it is a part of the one kept: the newest of the
+    /// kept nodes, the same samples bit for bit (the table of the newest `m` nodes is the start
+    /// of the table of more).
+    fn table_of(&self, nodes: &[Sample]) -> Option<&Table> {
         let bits = |s: &Sample| {
             let (hi, lo) = s.t.parts();
             [hi, lo, s.z, s.zdot].map(f64::to_bits)
         };
-        let same =
-            kept.len() >= nodes.len() && kept.iter().zip(nodes).all(|(a, b)| bits(a) == bits(b));
-        let all = kept.len() == nodes.len();
-        same.then_some((&self.table, all.then_some(&self.monomials)))
+        let k = nodes.len();
+        let same = self.n >= k
+            && self.nodes[self.n - k..self.n]
+                .iter()
+                .zip(nodes)
+                .all(|(a, b)| bits(a) == bits(b));
+        same.then_some(&self.table)
     }
 
-    /// Keeps `table` of `nodes` and `monomials`, the coefficients of the interpolant through
-    /// all of them.
-    fn keep(&mut self, nodes: &Newest, table: Table, monomials: [f64; MAX_POLY_DEGREE + 1]) {
-        self.nodes = Newest {
-            s: std::array::from_fn(|i| nodes.s[i]),
-            n: nodes.n.min(MAX_NODES),
-        };
+    /// Keeps `table` of `nodes` (oldest first, at most [`MAX_NODES`]).
+    fn keep(&mut self, nodes: &[Sample], table: Table) {
+        self.nodes[..nodes.len()].copy_from_slice(nodes);
+        self.n = nodes.len();
         self.table = table;
-        self.monomials = monomials;
     }
 }
 
-/// Divided differences on doubled nodes: `x` the nodes, `q[i] = f[x_0, …, x_i]`.
+/// Divided differences on doubled nodes, in `s = τ − t_0` (the first node's instant): `x` the
+/// nodes (`x[0] = x[1] = 0`), `q[i] = f[x_0, …, x_i]`.
 #[derive(Clone, Copy, Default)]
 struct Table {
     x: [f64; MAX_POLY_DEGREE + 1],
@@ -386,44 +339,74 @@ struct Table {
 }
 
 impl Table {
-    /// The table for `nodes` (at most [`MAX_NODES`]), in `s = τ − origin`. Its first `2m`
-    /// entries are the table of the first `m` nodes, the same numbers: entry `i` is computed
-    /// from entries `≤ i` alone.
-    fn of(nodes: &[Sample], origin: Instant) -> Self {
+    /// The table for `nodes`, given oldest first (one to [`MAX_NODES`]), on the nodes newest
+    /// first: node `i` is `nodes[len − 1 − i]`. Its first `2m` entries are the table of the
+    /// newest `m` nodes, the same numbers: entry `i` is computed from entries `≤ i` alone.
+    fn of(nodes: &[Sample]) -> Self {
         // Compiled for each number of nodes, so that the loops are unrolled.
         match nodes.len() {
-            1 => Self::of_n::<2>(nodes, origin),
-            2 => Self::of_n::<4>(nodes, origin),
-            _ => Self::of_n::<6>(nodes, origin),
+            1 => Self::of_n::<2>(nodes),
+            2 => Self::of_n::<4>(nodes),
+            _ => Self::of_n::<6>(nodes),
         }
     }
 
     /// [`Table::of`] for `N / 2` nodes.
     #[inline(always)]
-    fn of_n<const N: usize>(nodes: &[Sample], origin: Instant) -> Self {
+    fn of_n<const N: usize>(nodes: &[Sample]) -> Self {
         let n = N;
-        let nodes = &nodes[..N / 2];
+        let node = |i: usize| nodes[N / 2 - 1 - i];
+        let origin = node(0).t;
         let mut x = [0.0; MAX_POLY_DEGREE + 1];
         let mut q = [0.0; MAX_POLY_DEGREE + 1];
-        for (i, s) in nodes.iter().enumerate() {
-            let xi = s.t.since(origin);
-            x[2 * i] = xi;
-            x[2 * i + 1] = xi;
-            q[2 * i] = s.z;
-            q[2 * i + 1] = s.z;
+        let mut at = [0.0; MAX_NODES];
+        for i in 0..N / 2 {
+            let s = node(i);
+            at[i] = s.t.since(origin);
+            (x[2 * i], x[2 * i + 1]) = (at[i], at[i]);
+            (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
+        }
+        // The reciprocals of the node spacings, `inv[a][b] = 1/(at[a] − at[b])` for `b < a`:
+        // the only divisors of the table, so three divisions (independent of each other) make
+        // all of it.
+        let mut inv = [[0.0; MAX_NODES]; MAX_NODES];
+        for a in 1..N / 2 {
+            for b in 0..a {
+                inv[a][b] = 1.0 / (at[a] - at[b]);
+            }
         }
         // In place: after column j, q[i] (i ≥ j) holds f[x_{i−j}, …, x_i]; on a doubled node
         // the first divided difference is the sample's velocity.
         for j in 1..n {
             for i in (j..n).rev() {
                 q[i] = if j == 1 && i % 2 == 1 {
-                    nodes[i / 2].zdot
+                    node(i / 2).zdot
                 } else {
-                    (q[i] - q[i - 1]) / (x[i] - x[i - j])
+                    (q[i] - q[i - 1]) * inv[i / 2][(i - j) / 2]
                 };
             }
         }
         Self { x, q }
+    }
+
+    /// Value and derivative at `s` of the interpolants through the first `m = 1 … orders`
+    /// nodes (entry `m − 1`): the partial sums of one Newton series, `Σ_{i<2m} q_i ω_i(s)`
+    /// with `ω_i = Π_{k<i} (s − x_k)`.
+    fn predictions(&self, s: f64, orders: usize) -> [(f64, f64); MAX_NODES] {
+        let mut out = [(0.0, 0.0); MAX_NODES];
+        let (mut w, mut dw) = (1.0, 0.0);
+        let (mut z, mut zd) = (0.0, 0.0);
+        for (m, o) in out.iter_mut().enumerate().take(orders) {
+            for i in 2 * m..2 * m + 2 {
+                z += self.q[i] * w;
+                zd += self.q[i] * dw;
+                let u = s - self.x[i];
+                dw = dw * u + w;
+                w *= u;
+            }
+            *o = (z, zd);
+        }
+        out
     }
 
     /// Monomial coefficients of the interpolant through the first `n` (even) entries.
@@ -441,14 +424,19 @@ impl Table {
     fn monomials_n<const N: usize>(&self) -> [f64; MAX_POLY_DEGREE + 1] {
         let n = N;
         let (x, q) = (&self.x, &self.q);
-        // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0.
+        // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0; the
+        // last two passes (x_1 = x_0 = 0) only shift.
         let mut c = [0.0; MAX_POLY_DEGREE + 1];
         c[0] = q[n - 1];
         for j in (0..n - 1).rev() {
             for k in (1..n).rev() {
-                c[k] = c[k - 1] - x[j] * c[k];
+                c[k] = if j < 2 {
+                    c[k - 1]
+                } else {
+                    c[k - 1] - x[j] * c[k]
+                };
             }
-            c[0] = q[j] - x[j] * c[0];
+            c[0] = if j < 2 { q[j] } else { q[j] - x[j] * c[0] };
         }
         c
     }
@@ -542,7 +530,7 @@ mod tests {
             0.3 - 0.2 * t + 0.5 * t * t + 0.1 * t.powi(3) - 0.05 * t.powi(4) + 0.02 * t.powi(5)
         };
         let dp = |t: f64| -0.2 + t + 0.3 * t * t - 0.2 * t.powi(3) + 0.1 * t.powi(4);
-        let nodes: Vec<Sample> = [2.0, 1.5, 1.0]
+        let nodes: Vec<Sample> = [1.0, 1.5, 2.0]
             .iter()
             .map(|&t| Sample {
                 t: Instant::new(t),
@@ -550,7 +538,7 @@ mod tests {
                 zdot: dp(t),
             })
             .collect();
-        let c = hermite(&nodes, Instant::new(2.0));
+        let c = hermite(&nodes);
         // Taylor coefficients of p at t = 2.
         let mut out = [0.0; 6];
         PlateMotion::from(
@@ -580,7 +568,7 @@ mod tests {
                 hist.push(sine(1.0 + k as f64 * h)).unwrap();
             }
             let end = Instant::new(1.0 + 4.0 * h);
-            assert_eq!(hist.nodes(end).len(), MAX_NODES);
+            assert_eq!(hist.nodes(end), MAX_NODES);
             let s = sine(1.0 + 3.0 * h);
             let p = PlateMotion::from(hist.piece(end, (s.z, s.zdot)).unwrap());
             (p.motion(end).0 - sine(1.0 + 4.0 * h).z).abs()
@@ -621,18 +609,18 @@ mod tests {
         for k in 0..3 {
             hist.push(sine(k as f64 * 0.1)).unwrap();
         }
-        assert_eq!(hist.nodes(Instant::new(0.3)).len(), 2);
+        assert_eq!(hist.nodes(Instant::new(0.3)), 2);
         let mut jump = sine(0.3);
         jump.z += 0.5;
         hist.push(jump).unwrap();
-        assert_eq!(hist.usable(Instant::new(0.4)).len(), 1);
+        assert_eq!(hist.usable_at(Instant::new(0.4)), 1);
         // Spacing 0.1 is outside [h/4, 4h] for h = 1e-3 and for h = 1.
         let mut h2 = SampleHistory::new();
         h2.push(sine(0.0)).unwrap();
         h2.push(sine(0.1)).unwrap();
-        assert_eq!(h2.usable(Instant::new(0.101)).len(), 1);
-        assert_eq!(h2.usable(Instant::new(1.1)).len(), 1);
-        assert_eq!(h2.usable(Instant::new(0.2)).len(), 2);
+        assert_eq!(h2.usable_at(Instant::new(0.101)), 1);
+        assert_eq!(h2.usable_at(Instant::new(1.1)), 1);
+        assert_eq!(h2.usable_at(Instant::new(0.2)), 2);
         assert!(h2.push(sine(0.05)).is_err());
         let mut nan = sine(0.3);
         nan.zdot = f64::NAN;
@@ -641,37 +629,9 @@ mod tests {
 
     #[test]
     fn one_table_gives_each_order_the_bits_of_its_own() {
-        // The interpolant through the first m nodes from the table of all of them equals, bit
-        // for bit, the one from a table of those m nodes alone (divided differences, then
-        // monomials, as computed before the table was shared).
-        fn alone(nodes: &[Sample], origin: Instant) -> [f64; MAX_POLY_DEGREE + 1] {
-            let n = 2 * nodes.len();
-            let mut x = [0.0; MAX_POLY_DEGREE + 1];
-            let mut q = [0.0; MAX_POLY_DEGREE + 1];
-            for (i, s) in nodes.iter().enumerate() {
-                let xi = s.t.since(origin);
-                (x[2 * i], x[2 * i + 1]) = (xi, xi);
-                (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
-            }
-            for j in 1..n {
-                for i in (j..n).rev() {
-                    q[i] = if j == 1 && i % 2 == 1 {
-                        nodes[i / 2].zdot
-                    } else {
-                        (q[i] - q[i - 1]) / (x[i] - x[i - j])
-                    };
-                }
-            }
-            let mut c = [0.0; MAX_POLY_DEGREE + 1];
-            c[0] = q[n - 1];
-            for j in (0..n - 1).rev() {
-                for k in (1..n).rev() {
-                    c[k] = c[k - 1] - x[j] * c[k];
-                }
-                c[0] = q[j] - x[j] * c[0];
-            }
-            c
-        }
+        // The table of the newest m nodes is the start of the table of all of them, bit for
+        // bit (what lets the orders and the memo share one table), and so are the
+        // interpolants built from it.
         let mut seed = 0x2545_f491_4f6c_dd1d_u64;
         let mut rnd = || {
             seed ^= seed << 13;
@@ -684,16 +644,49 @@ mod tests {
             let mut nodes = [sine(0.0); MAX_NODES];
             for (k, n) in nodes.iter_mut().enumerate() {
                 *n = Sample {
-                    t: Instant::new(t0 - (k as f64) * (0.01 + 0.001 * rnd())),
+                    t: Instant::new(t0 + (k as f64) * (0.01 + 0.001 * rnd())),
                     z: rnd(),
                     zdot: rnd(),
                 };
             }
-            let table = Table::of(&nodes, nodes[0].t);
+            let all = Table::of(&nodes);
             for m in 1..=MAX_NODES {
-                let (a, b) = (table.monomials(2 * m), alone(&nodes[..m], nodes[0].t));
+                let part = Table::of(&nodes[MAX_NODES - m..]);
+                let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+                assert_eq!(bits(&all.q[..2 * m]), bits(&part.q[..2 * m]), "m = {m}");
+                assert_eq!(bits(&all.x[..2 * m]), bits(&part.x[..2 * m]), "m = {m}");
+                let (a, b) = (all.monomials(2 * m), part.monomials(2 * m));
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "m = {m}");
             }
+        }
+    }
+
+    #[test]
+    fn the_orders_predictions_are_the_interpolants_of_the_older_samples() {
+        // The Newton partial sums `order` compares against each order's interpolant in
+        // monomials, evaluated at the newest sample: equal to rounding.
+        let mut hist = SampleHistory::new();
+        for k in 0..4 {
+            hist.push(sine(0.3 + 0.01 * k as f64 + 1e-4 * (k * k) as f64))
+                .unwrap();
+        }
+        assert_eq!(hist.usable_at(Instant::new(0.35)), 4);
+        let all: Vec<Sample> = hist.entries().map(|e| e.0).collect();
+        let (newest, older) = (all[3], &all[..3]);
+        let s = newest.t.since(older[2].t);
+        let predicted = Table::of(older).predictions(s, MAX_NODES);
+        for m in 1..=MAX_NODES {
+            let (z, zd) = predicted[m - 1];
+            let c = hermite(&older[3 - m..]);
+            let (mut p, mut d) = (0.0, 0.0);
+            for &ck in c.iter().rev() {
+                d = d * s + p;
+                p = p * s + ck;
+            }
+            assert!(
+                (z - p).abs() <= 1e-15 && (zd - d).abs() <= 1e-13,
+                "m = {m}: {z} {p} {zd} {d}"
+            );
         }
     }
 
@@ -734,8 +727,8 @@ mod tests {
             s.z += n;
             hist.push(s).unwrap();
         }
-        assert_eq!(hist.usable(Instant::new(0.04)).len(), 4);
-        assert_eq!(hist.nodes(Instant::new(0.04)).len(), 1);
+        assert_eq!(hist.usable_at(Instant::new(0.04)), 4);
+        assert_eq!(hist.nodes(Instant::new(0.04)), 1);
     }
 
     #[test]
