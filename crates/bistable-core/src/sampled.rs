@@ -254,13 +254,18 @@ impl SampleHistory {
                 "end must be after the newest sample",
             ));
         }
-        let m = self.order(self.usable(h), memo);
-        let nodes = &self.samples[self.n - m..self.n];
+        // The table of every usable node (at most MAX_NODES) holds the table of the nodes the
+        // order picks as its start, so it does not wait for the order's choice.
+        let usable = self.usable(h);
+        let nodes = &self.samples[self.n - usable.min(MAX_NODES)..self.n];
         let table = Table::of(nodes);
+        let m = self.order(usable, memo);
         let mut c = table.monomials(2 * m);
         memo.keep(nodes, table);
         let (z_now, zd_now) = now;
-        let (d0, d1) = (z_now - c[0], zd_now - c[1]);
+        // The interpolant starts at the newest sample (`c0`, `c1` are its `z`, `ż`): the
+        // blend does not wait for the table either.
+        let (d0, d1) = (z_now - newest.z, zd_now - newest.zdot);
         // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
         let r = 1.0 / h;
         let r2 = r * r;
