@@ -344,15 +344,15 @@ struct Table {
 }
 
 impl Table {
-    /// The table for `nodes`, given oldest first (one to [`MAX_NODES`]), on the nodes newest
-    /// first: node `i` is `nodes[len − 1 − i]`. Its first `2m` entries are the table of the
+    /// The table for `nodes`, given oldest first (at least one; the newest [`MAX_NODES`] are
+    /// used), on the nodes newest first: node `i` is `nodes[len − 1 − i]`. Its first `2m` entries are the table of the
     /// newest `m` nodes, the same numbers: entry `i` is computed from entries `≤ i` alone.
     fn of(nodes: &[Sample]) -> Self {
         // Compiled for each number of nodes, so that the loops are unrolled.
         match nodes.len() {
             1 => Self::of_n::<2>(nodes),
             2 => Self::of_n::<4>(nodes),
-            _ => Self::of_n::<6>(nodes),
+            _ => Self::of_n::<6>(&nodes[nodes.len() - MAX_NODES..]),
         }
     }
 
@@ -360,7 +360,8 @@ impl Table {
     #[inline(always)]
     fn of_n<const N: usize>(nodes: &[Sample]) -> Self {
         let n = N;
-        let node = |i: usize| nodes[N / 2 - 1 - i];
+        debug_assert_eq!(nodes.len(), N / 2);
+        let node = |i: usize| nodes[nodes.len() - 1 - i];
         let origin = node(0).t;
         let mut x = [0.0; MAX_POLY_DEGREE + 1];
         let mut q = [0.0; MAX_POLY_DEGREE + 1];
