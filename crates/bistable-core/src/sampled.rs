@@ -266,6 +266,9 @@ impl SampleHistory {
         // The interpolant starts at the newest sample (`c0`, `c1` are its `z`, `ż`): the
         // blend does not wait for the table either.
         let (d0, d1) = (z_now - newest.z, zd_now - newest.zdot);
+        debug_assert!(
+            c[0].to_bits() == newest.z.to_bits() && c[1].to_bits() == newest.zdot.to_bits()
+        );
         // δ0 (1 − 3σ² + 2σ³) + δ1 h (σ − 2σ² + σ³), σ = s/h, in powers of s.
         let r = 1.0 / h;
         let r2 = r * r;
