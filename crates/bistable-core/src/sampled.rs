@@ -637,6 +637,93 @@ mod tests {
     }
 
     #[test]
+    fn the_table_by_reciprocals_is_the_table_by_divisions_to_rounding() {
+        // The reference: divided differences with one division per entry, nodes newest first
+        // (as the table was computed before its divisors became three reciprocals). Random
+        // samples, spacings within the [h/4, 4h] a piece accepts, and the interpolant of each
+        // order compared over the coming step in position and velocity, against what one
+        // rounding of the samples themselves (each z, ż moved by one ulp) does to it.
+        fn by_divisions(nodes: &[Sample]) -> [f64; MAX_POLY_DEGREE + 1] {
+            let newest_first: Vec<Sample> = nodes.iter().rev().copied().collect();
+            let n = 2 * nodes.len();
+            let (mut x, mut q) = ([0.0; 6], [0.0; 6]);
+            for (i, s) in newest_first.iter().enumerate() {
+                let xi = s.t.since(newest_first[0].t);
+                (x[2 * i], x[2 * i + 1]) = (xi, xi);
+                (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
+            }
+            for j in 1..n {
+                for i in (j..n).rev() {
+                    q[i] = if j == 1 && i % 2 == 1 {
+                        newest_first[i / 2].zdot
+                    } else {
+                        (q[i] - q[i - 1]) / (x[i] - x[i - j])
+                    };
+                }
+            }
+            let mut c = [0.0; 6];
+            c[0] = q[n - 1];
+            for j in (0..n - 1).rev() {
+                for k in (1..n).rev() {
+                    c[k] = c[k - 1] - x[j] * c[k];
+                }
+                c[0] = q[j] - x[j] * c[0];
+            }
+            c
+        }
+        let motion = |c: &[f64; 6], s: f64| {
+            let (mut p, mut d) = (0.0, 0.0);
+            for &ck in c.iter().rev() {
+                d = d * s + p;
+                p = p * s + ck;
+            }
+            (p, d)
+        };
+        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
+        let mut rnd = || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        };
+        let (mut worst, mut data) = (0.0_f64, 0.0_f64);
+        for _ in 0..5000 {
+            let h = 10f64.powf(-3.0 + 3.0 * rnd());
+            let mut t = 1000.0 * rnd();
+            let mut nodes = [sine(0.0); MAX_NODES];
+            for n in nodes.iter_mut() {
+                *n = sine(t);
+                t += h * 4f64.powf(2.0 * rnd() - 1.0);
+            }
+            for m in 1..=MAX_NODES {
+                let newest = &nodes[MAX_NODES - m..];
+                let (a, b) = (hermite(newest), by_divisions(newest));
+                let mut nudged = newest.to_vec();
+                for n in nudged.iter_mut() {
+                    n.z = f64::from_bits(n.z.to_bits() + 1);
+                    n.zdot = f64::from_bits(n.zdot.to_bits() + 1);
+                }
+                let c = by_divisions(&nudged);
+                for s in [0.5 * h, h] {
+                    let (za, da) = motion(&a, s);
+                    let (zb, db) = motion(&b, s);
+                    let (zc, dc) = motion(&c, s);
+                    // In units of the plate's amplitude (0.04) and velocity amplitude (0.07).
+                    worst = worst
+                        .max((za - zb).abs() / 0.04)
+                        .max((da - db).abs() / 0.07);
+                    data = data.max((zc - zb).abs() / 0.04).max((dc - db).abs() / 0.07);
+                }
+            }
+        }
+        // Measured: 4.8e-13 against 1.3e-11.
+        assert!(
+            worst <= 0.1 * data && worst <= 1e-12,
+            "largest difference {worst:e}, from one ulp of the samples {data:e}"
+        );
+    }
+
+    #[test]
     fn one_table_gives_each_order_the_bits_of_its_own() {
         // The table of the newest m nodes is the start of the table of all of them, bit for
         // bit (what lets the orders and the memo share one table), and so are the
