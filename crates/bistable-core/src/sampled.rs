@@ -513,6 +513,26 @@ mod tests {
         }
     }
 
+    /// Uniform numbers in `[0, 1)` from a xorshift generator seeded with `seed`.
+    fn uniform(mut seed: u64) -> impl FnMut() -> f64 {
+        move || {
+            seed ^= seed << 13;
+            seed ^= seed >> 7;
+            seed ^= seed << 17;
+            (seed >> 11) as f64 / (1u64 << 53) as f64
+        }
+    }
+
+    /// Value and slope at `s` of `Σ c_k s^k` (Horner).
+    fn value_and_slope(c: &[f64], s: f64) -> (f64, f64) {
+        let (mut p, mut d) = (0.0, 0.0);
+        for &ck in c.iter().rev() {
+            d = d * s + p;
+            p = p * s + ck;
+        }
+        (p, d)
+    }
+
     #[test]
     fn a_sample_at_the_newest_instant_replaces_it_and_an_earlier_one_is_refused() {
         let mut hist = SampleHistory::new();
@@ -671,21 +691,7 @@ mod tests {
             }
             c
         }
-        let motion = |c: &[f64; 6], s: f64| {
-            let (mut p, mut d) = (0.0, 0.0);
-            for &ck in c.iter().rev() {
-                d = d * s + p;
-                p = p * s + ck;
-            }
-            (p, d)
-        };
-        let mut seed = 0x9e37_79b9_7f4a_7c15_u64;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64
-        };
+        let mut rnd = uniform(0x9e37_79b9_7f4a_7c15);
         let (mut worst, mut data) = (0.0_f64, 0.0_f64);
         for _ in 0..5000 {
             let h = 10f64.powf(-3.0 + 3.0 * rnd());
@@ -705,9 +711,9 @@ mod tests {
                 }
                 let c = by_divisions(&nudged);
                 for s in [0.5 * h, h] {
-                    let (za, da) = motion(&a, s);
-                    let (zb, db) = motion(&b, s);
-                    let (zc, dc) = motion(&c, s);
+                    let (za, da) = value_and_slope(&a, s);
+                    let (zb, db) = value_and_slope(&b, s);
+                    let (zc, dc) = value_and_slope(&c, s);
                     // In units of the plate's amplitude (0.04) and velocity amplitude (0.07).
                     worst = worst
                         .max((za - zb).abs() / 0.04)
@@ -728,13 +734,8 @@ mod tests {
         // The table of the newest m nodes is the start of the table of all of them, bit for
         // bit (what lets the orders and the memo share one table), and so are the
         // interpolants built from it.
-        let mut seed = 0x2545_f491_4f6c_dd1d_u64;
-        let mut rnd = || {
-            seed ^= seed << 13;
-            seed ^= seed >> 7;
-            seed ^= seed << 17;
-            (seed >> 11) as f64 / (1u64 << 53) as f64 - 0.5
-        };
+        let mut uni = uniform(0x2545_f491_4f6c_dd1d);
+        let mut rnd = || uni() - 0.5;
         for _ in 0..2000 {
             let t0 = 100.0 * rnd();
             let mut nodes = [sine(0.0); MAX_NODES];
@@ -773,12 +774,7 @@ mod tests {
         let predicted = Table::of(older).predictions(s, MAX_NODES);
         for m in 1..=MAX_NODES {
             let (z, zd) = predicted[m - 1];
-            let c = hermite(&older[3 - m..]);
-            let (mut p, mut d) = (0.0, 0.0);
-            for &ck in c.iter().rev() {
-                d = d * s + p;
-                p = p * s + ck;
-            }
+            let (p, d) = value_and_slope(&hermite(&older[3 - m..]), s);
             assert!(
                 (z - p).abs() <= 1e-15 && (zd - d).abs() <= 1e-13,
                 "m = {m}: {z} {p} {zd} {d}"
