@@ -153,6 +153,11 @@ pub struct Model {
     pub memo: PieceMemo,
     /// The mass read ahead at the host's next communication points (derived data, not saved).
     pub ahead: Ahead,
+    /// External plates are rebuilt by the Hermite scheme (`plate_reconstruction`, a fixed
+    /// parameter).
+    hermite: bool,
+    /// [`fly_limit`] of the model's scale.
+    limit: f64,
 }
 
 /// Collects the events of an advance and the end of the last Taylor step computed.
@@ -319,6 +324,8 @@ impl Model {
             at_event: false,
             memo: PieceMemo::default(),
             ahead: Ahead::default(),
+            hermite: is_hermite(values),
+            limit: fly_limit(&scale),
         })
     }
 
@@ -401,6 +408,8 @@ impl Model {
             at_event: saved.at_event,
             memo: PieceMemo::default(),
             ahead: Ahead::default(),
+            hermite: is_hermite(values),
+            limit: fly_limit(&scale),
         };
         model.check_physical(values)?;
         Ok(model)
@@ -502,36 +511,37 @@ impl Model {
             return Ok(());
         }
         if self.mode == ShakerMode::External {
-            let keep = keeps_flight(values, derivatives);
+            let keep = self.hermite && derivatives[2..].iter().all(Option::is_none);
             self.sim.keep_flight(keep);
-            if keep && self.fly_over(t_end, values, derivatives) {
+            if keep && self.fly_over(t_end, values) {
                 return Ok(());
             }
         }
         self.step_core(t_end, values, derivatives, events, stop_at_events)
     }
 
-    /// External mode: the step when the core's current flight covers the new plate piece
-    /// without an event (`Simulator::fly_over`: no step to compute, no event, so nothing to
-    /// undo or check); `false` (nothing changed) when it does not, or the piece cannot be
-    /// built (`step_core` then takes the step or reports why).
-    fn fly_over(&mut self, t_end: f64, values: &[f64], derivatives: &PlateInputs) -> bool {
+    /// External mode with the Hermite plate: the step when the core's current flight covers
+    /// the plate piece rebuilt from the inputs' sample without an event
+    /// (`Simulator::fly_over_sampled`: no step to compute, no event, so nothing to undo or
+    /// check); `false` (nothing changed) when it does not, or the sample or the piece is
+    /// refused (`step_core` then takes the step or reports why).
+    fn fly_over(&mut self, t_end: f64, values: &[f64]) -> bool {
         let (tau_end, wanted, _) = self.plan(t_end, values);
         if wanted != self.applied || self.pending.is_some() {
             return false;
         }
-        let now = self.sim.instant();
-        let (z, zdot, _) = self.sim.plate().motion(now);
-        let mut history = self.history;
-        let Ok(piece) =
-            self.external_piece(now, tau_end, (z, zdot), values, derivatives, &mut history)
-        else {
-            return false;
+        let sample = Sample {
+            t: self.sim.instant(),
+            z: self.scale.plate_coefficient(0, values[var::z_in]),
+            zdot: self.scale.plate_coefficient(1, values[var::zdot_in]),
         };
-        if !self.sim.fly_over(&piece, fly_limit(&self.scale)) {
+        let end = Instant::new(tau_end);
+        if !self
+            .sim
+            .fly_over_sampled(&mut self.history, sample, end, &mut self.memo, self.limit)
+        {
             return false;
         }
-        self.history = history;
         self.impulse = impulse_of(&[]);
         self.at_event = false;
         self.time = t_end;
@@ -1259,13 +1269,13 @@ fn fly_limit(scale: &Scale) -> f64 {
 }
 
 /// Whether the core keeps a free flight across the plate pieces of an external-mode step
-/// (`Simulator::keep_flight`): for sampled inputs rebuilt by the Hermite scheme. Pieces from
-/// input derivatives or the first-order scheme restart the integration at each piece as before
-/// (the first-order scheme's plate acceleration is wrong by O(1), which makes its trajectory
-/// depend on every rounding: it is kept as it behaved).
-fn keeps_flight(values: &[f64], derivatives: &PlateInputs) -> bool {
+/// (`Simulator::keep_flight`): for sampled inputs rebuilt by the Hermite scheme (with no input
+/// derivatives for the step). Pieces from input derivatives or the first-order scheme restart
+/// the integration at each piece as before (the first-order scheme's plate acceleration is
+/// wrong by O(1), which makes its trajectory depend on every rounding: it is kept as it
+/// behaved).
+fn is_hermite(values: &[f64]) -> bool {
     Reconstruction::of(values[var::plate_reconstruction]) == Some(Reconstruction::Hermite)
-        && derivatives[2..].iter().all(Option::is_none)
 }
 
 /// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they

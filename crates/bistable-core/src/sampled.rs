@@ -126,16 +126,25 @@ impl SampleHistory {
     /// instant (a step that made no progress, e.g. an FMI 3.0 early return at its start).
     #[inline(always)]
     pub fn push(&mut self, s: Sample) -> Result<(), ParamError> {
+        let p = self.prepare(s)?;
+        self.commit(p);
+        Ok(())
+    }
+
+    /// `s` checked as [`SampleHistory::push`] checks it, ready to be added by
+    /// [`SampleHistory::commit`]; the history is not changed.
+    #[inline(always)]
+    pub(crate) fn prepare(&self, s: Sample) -> Result<Prepared, ParamError> {
         if !s.z.is_finite() {
             return Err(refuse("plate_sample_z", s.z, "must be finite"));
         }
         if !s.zdot.is_finite() {
             return Err(refuse("plate_sample_zdot", s.zdot, "must be finite"));
         }
-        if self.newest().is_some_and(|p| p.t == s.t) {
-            self.n -= 1;
-        }
-        let joined = match self.newest() {
+        let n = self.n;
+        let replaces = n > 0 && self.samples[n - 1].t == s.t;
+        let kept = n - usize::from(replaces);
+        let joined = match kept.checked_sub(1).map(|i| self.samples[i]) {
             Some(prev) => {
                 let h = s.t.since(prev.t);
                 if h.is_nan() || h <= 0.0 {
@@ -149,6 +158,19 @@ impl SampleHistory {
             }
             None => false,
         };
+        Ok(Prepared {
+            sample: s,
+            joined,
+            replaces,
+        })
+    }
+
+    /// Adds a sample that [`SampleHistory::prepare`] checked against this history as it is.
+    #[inline(always)]
+    pub(crate) fn commit(&mut self, p: Prepared) {
+        if p.replaces {
+            self.n -= 1;
+        }
         if self.n == MAX_SAMPLES {
             // From a copy: a move within the array would be a call to `memmove`.
             let (samples, joined) = (self.samples, self.joined);
@@ -156,72 +178,49 @@ impl SampleHistory {
             self.joined[..MAX_SAMPLES - 1].copy_from_slice(&joined[1..]);
             self.n -= 1;
         }
-        (self.samples[self.n], self.joined[self.n]) = (s, joined);
+        (self.samples[self.n], self.joined[self.n]) = (p.sample, p.joined);
         self.n += 1;
         // The oldest kept sample starts the history.
         self.joined[0] = false;
-        Ok(())
     }
 
-    /// How many of the newest samples a piece of length `h` after the newest one may be built
-    /// from: the newest one, then older ones while they are joined and spaced within
-    /// `[h/4, 4h]` (zero for an empty history).
+    /// The stored samples as a piece reads them (`None` for an empty history).
     #[inline(always)]
-    fn usable(&self, h: f64) -> usize {
-        let mut k = self.n.min(1);
-        for i in (1..self.n).rev() {
-            let spacing = self.samples[i].t.since(self.samples[i - 1].t);
-            if !(self.joined[i] && spacing >= 0.25 * h && spacing <= 4.0 * h) {
-                break;
-            }
-            k += 1;
-        }
-        k
+    fn window(&self) -> Option<Window<'_>> {
+        let n = self.n.checked_sub(1)?;
+        Some(Window {
+            newest: self.samples[n],
+            joined: self.joined[n],
+            older: &self.samples[..n],
+            older_joined: &self.joined[..n],
+        })
     }
 
-    /// [`SampleHistory::usable`] for a piece ending at `end`.
+    /// The samples as a piece reads them once `p` is added ([`SampleHistory::commit`]).
+    #[inline(always)]
+    fn window_after(&self, p: &Prepared) -> Window<'_> {
+        let kept = self.n - usize::from(p.replaces);
+        let from = kept.saturating_sub(MAX_SAMPLES - 1);
+        Window {
+            newest: p.sample,
+            joined: p.joined,
+            older: &self.samples[from..kept],
+            older_joined: &self.joined[from..kept],
+        }
+    }
+
+    /// [`Window::usable`] for a piece ending at `end`.
     #[cfg(test)]
     fn usable_at(&self, end: Instant) -> usize {
-        self.newest().map_or(0, |s| self.usable(end.since(s.t)))
+        self.window().map_or(0, |w| w.usable(end.since(w.newest.t)))
     }
 
     /// How many of the newest samples a piece ending at `end` is built from (see the module
     /// documentation for the choice).
     #[cfg(test)]
     fn nodes(&self, end: Instant) -> usize {
-        self.order(self.usable_at(end), &PieceMemo::default())
-    }
-
-    /// How many of the `usable` newest samples a piece is built from, with the table of the
-    /// older samples from `memo` when it holds it (see the module documentation for the
-    /// choice).
-    #[inline(always)]
-    fn order(&self, usable: usize, memo: &PieceMemo) -> usize {
-        let checkable = usable.saturating_sub(1).min(MAX_NODES);
-        let mut best = (f64::INFINITY, 1);
-        if checkable > 0 {
-            // The older samples' table (the table of the first nodes is a part of the table of
-            // more), from the last piece when it was built on them.
-            let n = self.n;
-            let (newest, older) = (self.samples[n - 1], &self.samples[n - 1 - checkable..n - 1]);
-            let fresh;
-            let table = match memo.table_of(older) {
-                Some(t) => t,
-                None => {
-                    fresh = Table::of(older);
-                    &fresh
-                }
-            };
-            let s = newest.t.since(older[checkable - 1].t);
-            let predicted = table.predictions(s, checkable);
-            for (m, &(z, zd)) in (1..=checkable).zip(&predicted) {
-                let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
-                if m == 1 || miss <= best.0 / GAIN {
-                    best = (miss, m);
-                }
-            }
-        }
-        usable.min(best.1)
+        self.window()
+            .map_or(0, |w| w.order(self.usable_at(end), &PieceMemo::default()))
     }
 
     /// The plate over `[newest sample, end]`, starting at the plate's current position and
@@ -238,13 +237,132 @@ impl SampleHistory {
         now: (f64, f64),
         memo: &mut PieceMemo,
     ) -> Result<PolyPiece, ParamError> {
-        let Some(newest) = self.newest() else {
+        let Some(w) = self.window() else {
             return Err(refuse(
                 "plate_samples",
                 0.0,
                 "at least one sample is needed",
             ));
         };
+        w.piece(end, now, memo)
+    }
+
+    /// The piece [`SampleHistory::piece_with`] gives once `p` is added, with the history left
+    /// as it is.
+    #[inline(always)]
+    pub(crate) fn piece_after(
+        &self,
+        p: &Prepared,
+        end: Instant,
+        now: (f64, f64),
+        memo: &mut PieceMemo,
+    ) -> Result<PolyPiece, ParamError> {
+        self.window_after(p).piece(end, now, memo)
+    }
+}
+
+/// A sample checked against a history by [`SampleHistory::prepare`].
+#[derive(Debug, Clone, Copy)]
+pub(crate) struct Prepared {
+    sample: Sample,
+    /// It continues the newest kept sample smoothly.
+    joined: bool,
+    /// It is at the newest sample's instant and replaces it.
+    replaces: bool,
+}
+
+/// The newest samples of a history as a piece reads them, newest first (node `i`): `newest`,
+/// then `older` (oldest first, at most `MAX_SAMPLES − 1`) from its end. `joined` and
+/// `older_joined` tell whether each continues the one before it (the oldest one's flag is not
+/// read).
+#[derive(Clone, Copy)]
+struct Window<'a> {
+    newest: Sample,
+    joined: bool,
+    older: &'a [Sample],
+    older_joined: &'a [bool],
+}
+
+impl Window<'_> {
+    /// Node `i`, newest first.
+    #[inline(always)]
+    fn node(&self, i: usize) -> Sample {
+        if i == 0 {
+            self.newest
+        } else {
+            self.older[self.older.len() - i]
+        }
+    }
+
+    /// Whether node `i` continues node `i + 1`.
+    #[inline(always)]
+    fn joined(&self, i: usize) -> bool {
+        if i == 0 {
+            self.joined
+        } else {
+            self.older_joined[self.older_joined.len() - i]
+        }
+    }
+
+    /// How many of the newest samples a piece of length `h` after the newest one may be built
+    /// from: the newest one, then older ones while they are joined and spaced within
+    /// `[h/4, 4h]`.
+    #[inline(always)]
+    fn usable(&self, h: f64) -> usize {
+        let mut k = 1;
+        for i in 1..=self.older.len() {
+            let spacing = self.node(i - 1).t.since(self.node(i).t);
+            if !(self.joined(i - 1) && spacing >= 0.25 * h && spacing <= 4.0 * h) {
+                break;
+            }
+            k += 1;
+        }
+        k
+    }
+
+    /// How many of the `usable` newest samples a piece is built from, with the table of the
+    /// older samples from `memo` when it holds it (see the module documentation for the
+    /// choice).
+    #[inline(always)]
+    fn order(&self, usable: usize, memo: &PieceMemo) -> usize {
+        let checkable = usable.saturating_sub(1).min(MAX_NODES);
+        let mut best = (f64::INFINITY, 1);
+        if checkable > 0 {
+            // The older samples' table (the table of the first nodes is a part of the table of
+            // more), from the last piece when it was built on them.
+            let older = |i: usize| self.node(i + 1);
+            let fresh;
+            let table = match memo.table_of(checkable, older) {
+                Some(t) => t,
+                None => {
+                    fresh = Table::of_nodes(checkable, older);
+                    &fresh
+                }
+            };
+            let newest = self.newest;
+            let s = newest.t.since(self.node(1).t);
+            let predicted = table.predictions(s, checkable);
+            for (m, &(z, zd)) in (1..=checkable).zip(&predicted) {
+                let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
+                if m == 1 || miss <= best.0 / GAIN {
+                    best = (miss, m);
+                }
+            }
+        }
+        usable.min(best.1)
+    }
+
+    /// The plate over `[newest sample, end]`, starting at the plate's current position and
+    /// velocity `now = (z, ż)` at the newest sample's instant, keeping in `memo` the table of
+    /// the nodes it is built from.
+    #[inline(always)]
+    fn piece(
+        &self,
+        end: Instant,
+        now: (f64, f64),
+        memo: &mut PieceMemo,
+    ) -> Result<PolyPiece, ParamError> {
+        let newest = self.newest;
         let start = newest.t;
         let h = end.since(start);
         if h.is_nan() || h <= 0.0 {
@@ -257,11 +375,12 @@ impl SampleHistory {
         // The table of every usable node (at most MAX_NODES) holds the table of the nodes the
         // order picks as its start, so it does not wait for the order's choice.
         let usable = self.usable(h);
-        let nodes = &self.samples[self.n - usable.min(MAX_NODES)..self.n];
-        let table = Table::of(nodes);
+        let count = usable.min(MAX_NODES);
+        let node = |i: usize| self.node(i);
+        let table = Table::of_nodes(count, node);
         let m = self.order(usable, memo);
         let mut c = table.monomials(2 * m);
-        memo.keep(nodes, table);
+        memo.keep(count, node, table);
         let (z_now, zd_now) = now;
         // The interpolant starts at the newest sample (`c0`, `c1` are its `z`, `ż`): the
         // blend does not wait for the table either.
@@ -306,34 +425,33 @@ fn hermite(nodes: &[Sample]) -> [f64; MAX_POLY_DEGREE + 1] {
 /// pieces).
 #[derive(Clone, Copy, Default)]
 pub struct PieceMemo {
-    /// The last piece's nodes, oldest first: the first `n` entries.
+    /// The last piece's nodes, newest first: the first `n` entries.
     nodes: [Sample; MAX_NODES],
     n: usize,
     table: Table,
 }
 
 impl PieceMemo {
-    /// The table of `nodes` (oldest first) if it is a part of the one kept: the newest of the
-    /// kept nodes, the same samples bit for bit (the table of the newest `m` nodes is the start
-    /// of the table of more).
-    fn table_of(&self, nodes: &[Sample]) -> Option<&Table> {
+    /// The table of the `k` nodes `node(0)`, … (newest first) if it is a part of the one
+    /// kept: the newest of the kept nodes, the same samples bit for bit (the table of the
+    /// newest `m` nodes is the start of the table of more).
+    #[inline(always)]
+    fn table_of(&self, k: usize, node: impl Fn(usize) -> Sample) -> Option<&Table> {
         let bits = |s: &Sample| {
             let (hi, lo) = s.t.parts();
             [hi, lo, s.z, s.zdot].map(f64::to_bits)
         };
-        let k = nodes.len();
-        let same = self.n >= k
-            && self.nodes[self.n - k..self.n]
-                .iter()
-                .zip(nodes)
-                .all(|(a, b)| bits(a) == bits(b));
+        let same = self.n >= k && (0..k).all(|i| bits(&self.nodes[i]) == bits(&node(i)));
         same.then_some(&self.table)
     }
 
-    /// Keeps `table` of `nodes` (oldest first, at most [`MAX_NODES`]).
-    fn keep(&mut self, nodes: &[Sample], table: Table) {
-        self.nodes[..nodes.len()].copy_from_slice(nodes);
-        self.n = nodes.len();
+    /// Keeps `table` of the `k` nodes `node(0)`, … (newest first, `k ≤ MAX_NODES`).
+    #[inline(always)]
+    fn keep(&mut self, k: usize, node: impl Fn(usize) -> Sample, table: Table) {
+        for (i, slot) in self.nodes.iter_mut().enumerate().take(k) {
+            *slot = node(i);
+        }
+        self.n = k;
         self.table = table;
     }
 }
@@ -347,24 +465,30 @@ struct Table {
 }
 
 impl Table {
-    /// The table for `nodes`, given oldest first (at least one; the newest [`MAX_NODES`] are
-    /// used), on the nodes newest first: node `i` is `nodes[len − 1 − i]`. Its first `2m` entries are the table of the
-    /// newest `m` nodes, the same numbers: entry `i` is computed from entries `≤ i` alone.
+    /// The table of `nodes`, given oldest first ([`Table::of_nodes`] of the newest).
+    #[cfg(test)]
     fn of(nodes: &[Sample]) -> Self {
+        let k = nodes.len().min(MAX_NODES);
+        Self::of_nodes(k, |i| nodes[nodes.len() - 1 - i])
+    }
+
+    /// The table of the `k` nodes `node(0)`, `node(1)`, … (newest first, `1 ≤ k ≤ MAX_NODES`).
+    /// Its first `2m` entries are the table of the newest `m` nodes, the same numbers: entry
+    /// `i` is computed from entries `≤ i` alone.
+    #[inline(always)]
+    fn of_nodes(k: usize, node: impl Fn(usize) -> Sample) -> Self {
         // Compiled for each number of nodes, so that the loops are unrolled.
-        match nodes.len() {
-            1 => Self::of_n::<2>(nodes),
-            2 => Self::of_n::<4>(nodes),
-            _ => Self::of_n::<6>(&nodes[nodes.len() - MAX_NODES..]),
+        match k {
+            1 => Self::of_n::<2>(node),
+            2 => Self::of_n::<4>(node),
+            _ => Self::of_n::<6>(node),
         }
     }
 
-    /// [`Table::of`] for `N / 2` nodes.
+    /// [`Table::of_nodes`] for `N / 2` nodes.
     #[inline(always)]
-    fn of_n<const N: usize>(nodes: &[Sample]) -> Self {
+    fn of_n<const N: usize>(node: impl Fn(usize) -> Sample) -> Self {
         let n = N;
-        debug_assert_eq!(nodes.len(), N / 2);
-        let node = |i: usize| nodes[nodes.len() - 1 - i];
         let origin = node(0).t;
         let mut x = [0.0; MAX_POLY_DEGREE + 1];
         let mut q = [0.0; MAX_POLY_DEGREE + 1];
@@ -780,6 +904,56 @@ mod tests {
                 "m = {m}: {z} {p} {zd} {d}"
             );
         }
+    }
+
+    #[test]
+    fn a_piece_after_a_prepared_sample_is_the_piece_after_the_push() {
+        // Uneven spacings, samples at the newest instant again, jumps, samples before the
+        // newest and non-finite ones, with a memo on each side.
+        let mut next = uniform(11);
+        let (mut hist, mut memo_a, mut memo_b) = (
+            SampleHistory::new(),
+            PieceMemo::default(),
+            PieceMemo::default(),
+        );
+        let (mut t, mut prepared_ok) = (0.0, 0);
+        for _ in 0..2_000 {
+            let r = next();
+            let at = match r {
+                r if r < 0.1 => t,
+                r if r < 0.15 => t - 0.005,
+                _ => t + 0.01 * (0.5 + next()),
+            };
+            let mut s = sine(at);
+            if r > 0.95 {
+                s.z += 0.01;
+            }
+            if r > 0.99 {
+                s.zdot = f64::NAN;
+            }
+            let end = Instant::new(at + 0.01 * (0.3 + next()));
+            let now = (s.z + 1e-6 * (next() - 0.5), s.zdot + 1e-6 * (next() - 0.5));
+            let mut pushed = hist;
+            match (hist.prepare(s), pushed.push(s)) {
+                (Ok(p), Ok(())) => {
+                    let a = hist.piece_after(&p, end, now, &mut memo_a).unwrap();
+                    let b = pushed.piece_with(end, now, &mut memo_b).unwrap();
+                    let bits = |c: &[f64]| c.iter().map(|v| v.to_bits()).collect::<Vec<_>>();
+                    assert_eq!((a.start(), a.end()), (b.start(), b.end()));
+                    assert_eq!(bits(&a.coeffs()), bits(&b.coeffs()));
+                    hist.commit(p);
+                    assert_eq!(hist, pushed);
+                    t = at;
+                    prepared_ok += 1;
+                }
+                (Err(e), Err(f)) => {
+                    assert_eq!((e.name, e.rule), (f.name, f.rule));
+                    assert_eq!(e.value.to_bits(), f.value.to_bits());
+                }
+                (a, b) => panic!("prepare {a:?}, push {b:?}"),
+            }
+        }
+        assert!(prepared_ok > 1_500, "{prepared_ok}");
     }
 
     #[test]

@@ -229,6 +229,21 @@ impl PolyPiece {
         out
     }
 
+    /// Position and velocity at `t`: the first two entries of [`PolyPiece::series`], the
+    /// same numbers.
+    #[inline(always)]
+    pub(crate) fn position_velocity(&self, t: Instant) -> (f64, f64) {
+        let s = t.since(self.start);
+        let mut c = self.coeffs;
+        let n = c.len();
+        for k in 0..2 {
+            for j in (k..n - 1).rev() {
+                c[j] += s * c[j + 1];
+            }
+        }
+        (c[0], c[1])
+    }
+
     fn series(&self, t: Instant, out: &mut [f64]) {
         // Taylor shift of the polynomial to s = t − start.
         let s = t.since(self.start);

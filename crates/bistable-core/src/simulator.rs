@@ -18,6 +18,7 @@ use crate::law::{self, Contact};
 use crate::params::{check, ParamError, Params, SolverOptions};
 use crate::potential::{self, BARRIER};
 use crate::roots::{first_root, first_root_from};
+use crate::sampled::{PieceMemo, Sample, SampleHistory};
 #[cfg(doc)]
 use crate::shaker::Sinusoid;
 use crate::shaker::{PlateEval, PlateMotion, PolyPiece};
@@ -856,7 +857,7 @@ impl Simulator {
     /// contact force is non-negative, and is released at once if the new motion pulls away.
     pub fn set_plate(&mut self, plate: PlateMotion) -> Result<(), SimError> {
         if let PlateMotion::Poly(piece) = &plate {
-            if self.keep_flight && self.continue_flight(piece, false, f64::INFINITY) {
+            if self.continue_flight(piece, false, f64::INFINITY) {
                 return Ok(());
             }
         }
@@ -892,7 +893,7 @@ impl Simulator {
     /// over the step and for `|z|`, `|ż|`, `|z̈|` over the piece must not exceed it (a host that
     /// skips its checks of the state after such a stretch chooses it so that they hold).
     pub fn fly_over(&mut self, piece: &PolyPiece, limit: f64) -> bool {
-        if !(self.keep_flight && self.continue_flight(piece, true, limit)) {
+        if !self.continue_flight(piece, true, limit) {
             return false;
         }
         self.now = piece.end();
@@ -923,33 +924,87 @@ impl Simulator {
     /// the piece and the last evaluation, which a checkpoint of a kept step records, so a
     /// simulator rebuilt from one decides the same way.
     fn continue_flight(&mut self, piece: &PolyPiece, whole: bool, limit: f64) -> bool {
+        let Some(stretch) = self.flight_stretch(piece.end(), whole) else {
+            return false;
+        };
+        if piece.start() != self.now {
+            return false;
+        }
+        let c = piece.coeffs();
+        let z_old = self.plate.law().motion(self.now).0;
+        let continuous = (c[0] - z_old).abs() <= 1e-12 * z_old.abs().max(1.0);
+        continuous && self.continue_with(piece, stretch, limit)
+    }
+
+    /// Takes as the plate the piece that `history` builds over `[now, end]` once `sample` (at
+    /// the current time) is added, from the plate's position and velocity now
+    /// ([`SampleHistory::piece_with`], with `memo`), and moves to `end`, as
+    /// [`Simulator::fly_over`] does with that piece; the sample is then added to `history`.
+    /// Otherwise (also when the sample or the piece is refused) returns `false` and changes
+    /// nothing but `memo`. The piece starts where the plate is by construction, so no
+    /// continuity check is needed.
+    pub fn fly_over_sampled(
+        &mut self,
+        history: &mut SampleHistory,
+        sample: Sample,
+        end: Instant,
+        memo: &mut PieceMemo,
+        limit: f64,
+    ) -> bool {
+        let Some(stretch) = self.flight_stretch(end, true) else {
+            return false;
+        };
+        let PlateMotion::Poly(old) = self.plate.law() else {
+            return false;
+        };
+        let Ok(prepared) = history.prepare(sample) else {
+            return false;
+        };
+        let now = self.now;
+        let piece = match history.piece_after(&prepared, end, old.position_velocity(now), memo) {
+            Ok(p) if sample.t == now => p,
+            _ => return false,
+        };
+        if !self.continue_with(&piece, stretch, limit) {
+            return false;
+        }
+        history.commit(prepared);
+        self.now = end;
+        true
+    }
+
+    /// Where the current free step may go on under a plate piece that starts now and ends at
+    /// `end` (see [`Simulator::continue_flight`]): `(sa, len)`, the step's offsets of now and
+    /// of the stretch's end; `None` when it may not.
+    #[inline(always)]
+    fn flight_stretch(&self, end: Instant, whole: bool) -> Option<(f64, f64)> {
         if !self.live
             || self.mode != ContactMode::Free
             || self.var.is_some()
             || !self.cut_at_horizon()
         {
-            return false;
+            return None;
         }
         let now = self.now;
-        if self.plate.law().horizon() != Some(now) || piece.start() != now {
-            return false;
+        if self.plate.law().horizon() != Some(now) {
+            return None;
         }
         let t0 = self.t0;
         let reach = self.step.reach;
         let sa = now.since(t0);
-        let room = piece.end().since(t0);
+        let room = end.since(t0);
         let len = room.min(reach);
         // NaN fails every comparison: nothing is continued then.
         let fits = len > sa && (room < reach || !whole);
-        if !fits {
-            return false;
-        }
+        fits.then_some((sa, len))
+    }
+
+    /// The rest of [`Simulator::continue_flight`]: the bounds over the stretch `(sa, len)` for
+    /// `piece`, which continues the plate now, and the switch to it.
+    #[inline(always)]
+    fn continue_with(&mut self, piece: &PolyPiece, (sa, len): (f64, f64), limit: f64) -> bool {
         let c = piece.coeffs();
-        let z_old = self.plate.law().motion(now).0;
-        let continuous = (c[0] - z_old).abs() <= 1e-12 * z_old.abs().max(1.0);
-        if !continuous {
-            return false;
-        }
+        let reach = self.step.reach;
         let (well, on_barrier) = (self.well, self.on_barrier);
         let step = &mut self.step;
         let x = &step.series.x[..=self.order + 1];

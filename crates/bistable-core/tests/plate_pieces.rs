@@ -1,8 +1,8 @@
 //! External plate motion given piece by piece (as an FMU input or a ROS command stream would).
 
 use bistable_core::{
-    Event, Impact, Instant, Params, PlateMotion, PolyPiece, SimError, Simulator, Sinusoid,
-    SolverOptions,
+    Event, Impact, Instant, Params, PieceMemo, PlateMotion, PolyPiece, Sample, SampleHistory,
+    SimError, Simulator, Sinusoid, SolverOptions,
 };
 
 fn impacts(ev: &[Event]) -> Vec<Impact> {
@@ -198,4 +198,77 @@ fn kept_flights_follow_the_restarted_run_and_restore_bit_for_bit() {
         assert_eq!(ev_p, ev_q);
     }
     assert!(checked >= 5, "{checked} checkpoints inside kept flights");
+}
+
+/// The baseline sinusoid sampled every `h` for `n` steps and fed to a simulator that keeps
+/// flights, as the FMU feeds it: each sample is added to the history and the piece to the next
+/// sample either flown over or taken by `set_plate` and an advance. With `fast` the flight is
+/// tried by `fly_over_sampled`, otherwise by `push`, `piece_with` and `fly_over`. Every 97th
+/// sample has a non-finite velocity and is skipped (refused). Returns the state bits after
+/// each step, the events, the history and how many steps were flown over.
+fn run_samples(h: f64, n: u32, fast: bool) -> (Vec<[u64; 4]>, Vec<Event>, SampleHistory, u32) {
+    let shaker = PlateMotion::from(Sinusoid::new(1.75, 0.07).unwrap());
+    let mut sim = Simulator::new(Params::paper(), shaker, SolverOptions::default()).unwrap();
+    sim.keep_flight(true);
+    let (mut hist, mut memo) = (SampleHistory::new(), PieceMemo::default());
+    let (mut states, mut ev, mut flown) = (Vec::new(), Vec::new(), 0);
+    for k in 0..n {
+        let now = sim.instant();
+        let (z, zdot, _) = shaker.motion(now);
+        let zdot = if k % 97 == 50 { f64::NAN } else { zdot };
+        let sample = Sample { t: now, z, zdot };
+        let end = Instant::new(f64::from(k + 1) * h);
+        let before = hist;
+        let fly = if fast {
+            sim.fly_over_sampled(&mut hist, sample, end, &mut memo, 1e50)
+        } else {
+            let mut pushed = hist;
+            let fly = pushed.push(sample).is_ok() && {
+                let (z, zd, _) = sim.plate().motion(now);
+                let piece = pushed.piece_with(end, (z, zd), &mut memo).unwrap();
+                sim.fly_over(&piece, 1e50)
+            };
+            if fly {
+                hist = pushed;
+            }
+            fly
+        };
+        if !fly {
+            assert_eq!(hist, before, "a flight not continued leaves the history");
+            if hist.push(sample).is_err() {
+                continue;
+            }
+            let (z, zd, _) = sim.plate().motion(now);
+            let piece = hist.piece_with(end, (z, zd), &mut memo).unwrap();
+            sim.set_plate(piece.into()).unwrap();
+            sim.advance_instant(end, &mut |e: &Event| ev.push(*e))
+                .unwrap();
+        }
+        flown += u32::from(fly);
+        let s = sim.state();
+        states.push([s.x, s.v, s.z, s.zdot].map(f64::to_bits));
+    }
+    (states, ev, hist, flown)
+}
+
+#[test]
+fn sampled_fly_overs_are_the_push_the_piece_and_the_fly_over() {
+    let (h, n) = (0.01, 20_000);
+    let (a, ev_a, hist_a, flown_a) = run_samples(h, n, false);
+    let (b, ev_b, hist_b, flown_b) = run_samples(h, n, true);
+    let first = a.iter().zip(&b).position(|(p, q)| p != q);
+    assert!(
+        a.len() == b.len() && first.is_none(),
+        "states differ from step {first:?}"
+    );
+    assert_eq!(ev_a, ev_b);
+    assert_eq!(hist_a, hist_b);
+    assert_eq!(flown_a, flown_b);
+    assert!(
+        impacts(&ev_a).len() > 20,
+        "{} impacts",
+        impacts(&ev_a).len()
+    );
+    assert!(flown_b > n * 9 / 10, "{flown_b} of {n} steps flown over");
+    assert!(flown_b < n - 200, "{flown_b} of {n} steps flown over");
 }
