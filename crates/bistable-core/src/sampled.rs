@@ -441,7 +441,10 @@ impl PieceMemo {
             let (hi, lo) = s.t.parts();
             [hi, lo, s.z, s.zdot].map(f64::to_bits)
         };
-        let same = self.n >= k && (0..k).all(|i| bits(&self.nodes[i]) == bits(&node(i)));
+        let mut same = self.n >= k;
+        for (i, kept) in self.nodes.iter().enumerate().take(k) {
+            same &= bits(kept) == bits(&node(i));
+        }
         same.then_some(&self.table)
     }
 
