@@ -1036,12 +1036,15 @@ impl Simulator {
         let margin = 1e-10 * (1.0 + guard.size + c[0].abs());
         // The mass from the last evaluation at s_ref ≤ sa: x ≥ x_ref + v_ref (s − s_ref) −
         // accel (s − s_ref)²/2, the linear part smallest at an end of the stretch.
-        let from_anchor = guard.anchor.is_some_and(|(s_ref, xa, va)| {
-            let (d1, d2) = (sa - s_ref, len - s_ref);
-            let low = xa + (va * d1).min(va * d2) - 0.5 * guard.accel * d2 * d2;
-            let high = c[0] + (c[1] * hw).max(0.0) + q * hw * hw;
-            d1 >= 0.0 && low - high > margin
-        });
+        let from_anchor = match guard.anchor {
+            Some((s_ref, xa, va)) => {
+                let (d1, d2) = (sa - s_ref, len - s_ref);
+                let low = xa + (va * d1).min(va * d2) - 0.5 * guard.accel * d2 * d2;
+                let high = c[0] + (c[1] * hw).max(0.0) + q * hw * hw;
+                d1 >= 0.0 && low - high > margin
+            }
+            None => false,
+        };
         if !from_anchor {
             // From the mass now: gap ≥ (x − c0) + min(0, (v − c1) hw) − (accel/2 + q) hw².
             let (xa, va) = eval_d(x, sa);

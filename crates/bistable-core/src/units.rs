@@ -75,6 +75,7 @@ impl Scale {
     }
 
     /// Nondimensional Taylor coefficient `z_k` of the SI plate derivative `d^k ẑ/dt^k`.
+    #[inline]
     pub fn plate_coefficient(&self, k: usize, d: f64) -> f64 {
         let mut c = d / self.dx;
         for j in 1..=k {
