@@ -498,7 +498,8 @@ impl Table {
         let mut at = [0.0; MAX_NODES];
         for i in 0..N / 2 {
             let s = node(i);
-            at[i] = s.t.since(origin);
+            // The origin's own offset is zero exactly (`since` of equal instants).
+            at[i] = if i == 0 { 0.0 } else { s.t.since(origin) };
             (x[2 * i], x[2 * i + 1]) = (at[i], at[i]);
             (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
         }
