@@ -188,24 +188,25 @@ impl SampleHistory {
     #[inline(always)]
     fn window(&self) -> Option<Window<'_>> {
         let n = self.n.checked_sub(1)?;
-        Some(Window {
-            newest: self.samples[n],
-            joined: self.joined[n],
-            older: &self.samples[..n],
-            older_joined: &self.joined[..n],
-        })
+        Some(self.window_of(self.samples[n], self.joined[n], n))
     }
 
     /// The samples as a piece reads them once `p` is added ([`SampleHistory::commit`]).
     #[inline(always)]
     fn window_after(&self, p: &Prepared) -> Window<'_> {
-        let kept = self.n - usize::from(p.replaces);
-        let from = kept.saturating_sub(MAX_SAMPLES - 1);
+        self.window_of(p.sample, p.joined, self.n - usize::from(p.replaces))
+    }
+
+    /// `newest` (continuing its predecessor: `joined`) after the first `kept` stored samples.
+    #[inline(always)]
+    fn window_of(&self, newest: Sample, joined: bool, kept: usize) -> Window<'_> {
         Window {
-            newest: p.sample,
-            joined: p.joined,
-            older: &self.samples[from..kept],
-            older_joined: &self.joined[from..kept],
+            newest,
+            joined,
+            samples: &self.samples,
+            flags: &self.joined,
+            kept,
+            len: 1 + kept.min(MAX_SAMPLES - 1),
         }
     }
 
@@ -271,26 +272,35 @@ pub(crate) struct Prepared {
     replaces: bool,
 }
 
-/// The newest samples of a history as a piece reads them, newest first (node `i`): `newest`,
-/// then `older` (oldest first, at most `MAX_SAMPLES − 1`) from its end. `joined` and
-/// `older_joined` tell whether each continues the one before it (the oldest one's flag is not
+/// The newest samples of a history as a piece reads them, newest first (node `i`, `i < len ≤
+/// MAX_SAMPLES`): `newest`, then the stored samples before slot `kept`, newest first. `joined`
+/// and `flags` tell whether each continues the one before it (the oldest one's flag is not
 /// read).
 #[derive(Clone, Copy)]
 struct Window<'a> {
     newest: Sample,
     joined: bool,
-    older: &'a [Sample],
-    older_joined: &'a [bool],
+    samples: &'a [Sample; MAX_SAMPLES],
+    flags: &'a [bool; MAX_SAMPLES],
+    kept: usize,
+    len: usize,
 }
 
 impl Window<'_> {
+    /// The slot of node `i ≥ 1` (wrapped into the array: slots of nodes past `len` are read
+    /// without a bounds check, and not used).
+    #[inline(always)]
+    fn slot(&self, i: usize) -> usize {
+        self.kept.wrapping_sub(i) % MAX_SAMPLES
+    }
+
     /// Node `i`, newest first.
     #[inline(always)]
     fn node(&self, i: usize) -> Sample {
         if i == 0 {
             self.newest
         } else {
-            self.older[self.older.len() - i]
+            self.samples[self.slot(i)]
         }
     }
 
@@ -300,7 +310,7 @@ impl Window<'_> {
         if i == 0 {
             self.joined
         } else {
-            self.older_joined[self.older_joined.len() - i]
+            self.flags[self.slot(i)]
         }
     }
 
@@ -310,7 +320,7 @@ impl Window<'_> {
     #[inline(always)]
     fn usable(&self, h: f64) -> usize {
         let mut k = 1;
-        for i in 1..=self.older.len() {
+        for i in 1..self.len {
             let spacing = self.node(i - 1).t.since(self.node(i).t);
             if !(self.joined(i - 1) && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
