@@ -469,11 +469,12 @@ impl PieceMemo {
     }
 }
 
-/// Divided differences on doubled nodes, in `s = τ − t_0` (the first node's instant): `x` the
-/// nodes (`x[0] = x[1] = 0`), `q[i] = f[x_0, …, x_i]`.
+/// Divided differences on doubled nodes, in `s = τ − t_0` (the first node's instant): `at` the
+/// node instants (`at[0] = 0`), each doubled in the table (`x_i = at[i / 2]`), and
+/// `q[i] = f[x_0, …, x_i]`.
 #[derive(Clone, Copy, Default)]
 struct Table {
-    x: [f64; MAX_POLY_DEGREE + 1],
+    at: [f64; MAX_NODES],
     q: [f64; MAX_POLY_DEGREE + 1],
 }
 
@@ -503,14 +504,12 @@ impl Table {
     fn of_n<const N: usize>(node: impl Fn(usize) -> Sample) -> Self {
         let n = N;
         let origin = node(0).t;
-        let mut x = [0.0; MAX_POLY_DEGREE + 1];
         let mut q = [0.0; MAX_POLY_DEGREE + 1];
         let mut at = [0.0; MAX_NODES];
         for i in 0..N / 2 {
             let s = node(i);
             // The origin's own offset is zero exactly (`since` of equal instants).
             at[i] = if i == 0 { 0.0 } else { s.t.since(origin) };
-            (x[2 * i], x[2 * i + 1]) = (at[i], at[i]);
             (q[2 * i], q[2 * i + 1]) = (s.z, s.z);
         }
         // The reciprocals of the node spacings, `inv[a][b] = 1/(at[a] − at[b])` for `b < a`:
@@ -533,7 +532,7 @@ impl Table {
                 };
             }
         }
-        Self { x, q }
+        Self { at, q }
     }
 
     /// Value and derivative at `s` of the interpolants through the first `m = 1 … orders`
@@ -547,7 +546,7 @@ impl Table {
             for i in 2 * m..2 * m + 2 {
                 z += self.q[i] * w;
                 zd += self.q[i] * dw;
-                let u = s - self.x[i];
+                let u = s - self.at[i / 2];
                 dw = dw * u + w;
                 w *= u;
             }
@@ -570,7 +569,7 @@ impl Table {
     #[inline(always)]
     fn monomials_n<const N: usize>(&self) -> [f64; MAX_POLY_DEGREE + 1] {
         let n = N;
-        let (x, q) = (&self.x, &self.q);
+        let (at, q) = (&self.at, &self.q);
         // Newton form to monomials: p = q_{n−1}; p ← p·(s − x_j) + q_j for j = n−2 … 0; the
         // last two passes (x_1 = x_0 = 0) only shift.
         let mut c = [0.0; MAX_POLY_DEGREE + 1];
@@ -580,10 +579,10 @@ impl Table {
                 c[k] = if j < 2 {
                     c[k - 1]
                 } else {
-                    c[k - 1] - x[j] * c[k]
+                    c[k - 1] - at[j / 2] * c[k]
                 };
             }
-            c[0] = if j < 2 { q[j] } else { q[j] - x[j] * c[0] };
+            c[0] = if j < 2 { q[j] } else { q[j] - at[j / 2] * c[0] };
         }
         c
     }
@@ -889,7 +888,7 @@ mod tests {
                 let part = Table::of(&nodes[MAX_NODES - m..]);
                 let bits = |v: &[f64]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
                 assert_eq!(bits(&all.q[..2 * m]), bits(&part.q[..2 * m]), "m = {m}");
-                assert_eq!(bits(&all.x[..2 * m]), bits(&part.x[..2 * m]), "m = {m}");
+                assert_eq!(bits(&all.at[..m]), bits(&part.at[..m]), "m = {m}");
                 let (a, b) = (all.monomials(2 * m), part.monomials(2 * m));
                 assert_eq!(a.map(f64::to_bits), b.map(f64::to_bits), "m = {m}");
             }
