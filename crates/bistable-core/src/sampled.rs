@@ -213,15 +213,17 @@ impl SampleHistory {
     /// [`Window::usable`] for a piece ending at `end`.
     #[cfg(test)]
     fn usable_at(&self, end: Instant) -> usize {
-        self.window().map_or(0, |w| w.usable(end.since(w.newest.t)))
+        self.window()
+            .map_or(0, |w| w.usable(end.since(w.newest.t)).0)
     }
 
     /// How many of the newest samples a piece ending at `end` is built from (see the module
     /// documentation for the choice).
     #[cfg(test)]
     fn nodes(&self, end: Instant) -> usize {
-        self.window()
-            .map_or(0, |w| w.order(self.usable_at(end), &PieceMemo::default()))
+        self.window().map_or(0, |w| {
+            w.order(w.usable(end.since(w.newest.t)), &PieceMemo::default())
+        })
     }
 
     /// The plate over `[newest sample, end]`, starting at the plate's current position and
@@ -316,25 +318,28 @@ impl Window<'_> {
 
     /// How many of the newest samples a piece of length `h` after the newest one may be built
     /// from: the newest one, then older ones while they are joined and spaced within
-    /// `[h/4, 4h]`.
+    /// `[h/4, 4h]`; with the spacing of the two newest (NaN for one sample).
     #[inline(always)]
-    fn usable(&self, h: f64) -> usize {
-        let mut k = 1;
+    fn usable(&self, h: f64) -> (usize, f64) {
+        let (mut k, mut newest_spacing) = (1, f64::NAN);
         for i in 1..self.len {
             let spacing = self.node(i - 1).t.since(self.node(i).t);
+            if i == 1 {
+                newest_spacing = spacing;
+            }
             if !(self.joined(i - 1) && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
             }
             k += 1;
         }
-        k
+        (k, newest_spacing)
     }
 
     /// How many of the `usable` newest samples a piece is built from, with the table of the
     /// older samples from `memo` when it holds it (see the module documentation for the
-    /// choice).
+    /// choice); `s` is the spacing of the two newest ([`Window::usable`]).
     #[inline(always)]
-    fn order(&self, usable: usize, memo: &PieceMemo) -> usize {
+    fn order(&self, (usable, s): (usize, f64), memo: &PieceMemo) -> usize {
         let checkable = usable.saturating_sub(1).min(MAX_NODES);
         let mut best = (f64::INFINITY, 1);
         if checkable > 0 {
@@ -350,7 +355,6 @@ impl Window<'_> {
                 }
             };
             let newest = self.newest;
-            let s = newest.t.since(self.node(1).t);
             let predicted = table.predictions(s, checkable);
             for (m, &(z, zd)) in (1..=checkable).zip(&predicted) {
                 let miss = (z - newest.z).abs() + s * (zd - newest.zdot).abs();
@@ -385,7 +389,7 @@ impl Window<'_> {
         // The table of every usable node (at most MAX_NODES) holds the table of the nodes the
         // order picks as its start, so it does not wait for the order's choice.
         let usable = self.usable(h);
-        let count = usable.min(MAX_NODES);
+        let count = usable.0.min(MAX_NODES);
         let node = |i: usize| self.node(i);
         let table = Table::of_nodes(count, node);
         let m = self.order(usable, memo);
@@ -408,7 +412,8 @@ impl Window<'_> {
         }
         // Exactly where the plate is (`c0 + δ0` may round away from it).
         (c[0], c[1]) = (z_now, zd_now);
-        PolyPiece::new(start, end, &c)
+        // `h > 0` is checked above; `new` tells which coefficient is not finite.
+        PolyPiece::of_finite(start, end, c).map_or_else(|| PolyPiece::new(start, end, &c), Ok)
     }
 }
 
@@ -451,11 +456,15 @@ impl PieceMemo {
             let (hi, lo) = s.t.parts();
             [hi, lo, s.z, s.zdot].map(f64::to_bits)
         };
-        let mut same = self.n >= k;
-        for (i, kept) in self.nodes.iter().enumerate().take(k) {
-            same &= bits(kept) == bits(&node(i));
+        // The bits of every kept node against the node asked (the nodes past `k` read too,
+        // without a branch, and their differences masked out).
+        let mut differ = 0;
+        for (i, kept) in self.nodes.iter().enumerate() {
+            let (a, b) = (bits(kept), bits(&node(i)));
+            let d = (a[0] ^ b[0]) | (a[1] ^ b[1]) | (a[2] ^ b[2]) | (a[3] ^ b[3]);
+            differ |= if i < k { d } else { 0 };
         }
-        same.then_some(&self.table)
+        (self.n >= k && differ == 0).then_some(&self.table)
     }
 
     /// Keeps `table` of the `k` nodes `node(0)`, … (newest first, `k ≤ MAX_NODES`).

@@ -183,6 +183,19 @@ impl PolyPiece {
         })
     }
 
+    /// [`PolyPiece::new`] of all [`MAX_POLY_DEGREE`]` + 1` coefficients for an `end` after
+    /// `start` (the caller's check): `None` when a coefficient is not finite.
+    #[inline(always)]
+    pub(crate) fn of_finite(
+        start: Instant,
+        end: Instant,
+        coeffs: [f64; MAX_POLY_DEGREE + 1],
+    ) -> Option<Self> {
+        debug_assert!(end.since(start) > 0.0);
+        let finite = coeffs.iter().fold(true, |all, c| all & c.is_finite());
+        finite.then_some(Self { start, end, coeffs })
+    }
+
     /// A cubic through `(z0, zd0)` at `start` and `(z1, zd1)` at `end` (Hermite interpolation).
     pub fn hermite(
         start: Instant,

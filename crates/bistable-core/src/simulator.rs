@@ -1029,7 +1029,7 @@ impl Simulator {
             20.0 * q,
         ]
         .iter()
-        .all(|&b| b <= limit);
+        .fold(true, |all, &b| all & (b <= limit));
         if !(guard.usable && bounded) {
             return false;
         }
