@@ -567,8 +567,7 @@ impl Model {
         };
         history.push(sample).map_err(|e| describe_param(&e))?;
         let derivatives_given = inputs[2..].iter().any(Option::is_some);
-        let scheme = Reconstruction::of(values[var::plate_reconstruction]);
-        if derivatives_given || scheme != Some(Reconstruction::Hermite) {
+        if derivatives_given || !self.hermite {
             plate_piece(&self.scale, now, tau_end, &inputs, Some(z))
         } else {
             history
@@ -1268,12 +1267,12 @@ fn fly_limit(scale: &Scale) -> f64 {
     (1e280 / factor).sqrt().sqrt().min(1e50)
 }
 
-/// Whether the core keeps a free flight across the plate pieces of an external-mode step
-/// (`Simulator::keep_flight`): for sampled inputs rebuilt by the Hermite scheme (with no input
-/// derivatives for the step). Pieces from input derivatives or the first-order scheme restart
-/// the integration at each piece as before (the first-order scheme's plate acceleration is
-/// wrong by O(1), which makes its trajectory depend on every rounding: it is kept as it
-/// behaved).
+/// Whether `plate_reconstruction` rebuilds sampled inputs by the Hermite scheme. The core keeps
+/// a free flight across the plate pieces of an external-mode step (`Simulator::keep_flight`)
+/// only for such pieces, in steps without input derivatives; pieces from input derivatives or
+/// the first-order scheme restart the integration at each piece as before (the first-order
+/// scheme's plate acceleration is wrong by O(1), which makes its trajectory depend on every
+/// rounding: it is kept as it behaved).
 fn is_hermite(values: &[f64]) -> bool {
     Reconstruction::of(values[var::plate_reconstruction]) == Some(Reconstruction::Hermite)
 }

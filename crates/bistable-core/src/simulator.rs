@@ -951,7 +951,8 @@ impl Simulator {
         memo: &mut PieceMemo,
         limit: f64,
     ) -> bool {
-        let Some(stretch) = self.flight_stretch(end, true) else {
+        let now = self.now;
+        let Some(stretch) = self.flight_stretch(end, true).filter(|_| sample.t == now) else {
             return false;
         };
         let PlateMotion::Poly(old) = self.plate.law() else {
@@ -960,10 +961,9 @@ impl Simulator {
         let Ok(prepared) = history.prepare(sample) else {
             return false;
         };
-        let now = self.now;
-        let piece = match history.piece_after(&prepared, end, old.position_velocity(now), memo) {
-            Ok(p) if sample.t == now => p,
-            _ => return false,
+        let Ok(piece) = history.piece_after(&prepared, end, old.position_velocity(now), memo)
+        else {
+            return false;
         };
         if !self.continue_with(&piece, stretch, limit) {
             return false;
