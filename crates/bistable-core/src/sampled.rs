@@ -296,24 +296,21 @@ impl Window<'_> {
         self.kept.wrapping_sub(i) % MAX_SAMPLES
     }
 
-    /// Node `i`, newest first.
+    /// Node `i`, newest first, and whether it continues node `i + 1`.
     #[inline(always)]
-    fn node(&self, i: usize) -> Sample {
+    fn entry(&self, i: usize) -> (Sample, bool) {
         if i == 0 {
-            self.newest
+            (self.newest, self.joined)
         } else {
-            self.samples[self.slot(i)]
+            let k = self.slot(i);
+            (self.samples[k], self.flags[k])
         }
     }
 
-    /// Whether node `i` continues node `i + 1`.
+    /// Node `i`, newest first.
     #[inline(always)]
-    fn joined(&self, i: usize) -> bool {
-        if i == 0 {
-            self.joined
-        } else {
-            self.flags[self.slot(i)]
-        }
+    fn node(&self, i: usize) -> Sample {
+        self.entry(i).0
     }
 
     /// How many of the newest samples a piece of length `h` after the newest one may be built
@@ -327,7 +324,7 @@ impl Window<'_> {
             if i == 1 {
                 newest_spacing = spacing;
             }
-            if !(self.joined(i - 1) && spacing >= 0.25 * h && spacing <= 4.0 * h) {
+            if !(self.entry(i - 1).1 && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
             }
             k += 1;
