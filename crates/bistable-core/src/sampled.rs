@@ -320,11 +320,12 @@ impl Window<'_> {
     fn usable(&self, h: f64) -> (usize, f64) {
         let (mut k, mut newest_spacing) = (1, f64::NAN);
         for i in 1..self.len {
-            let spacing = self.node(i - 1).t.since(self.node(i).t);
+            let (newer, joined) = self.entry(i - 1);
+            let spacing = newer.t.since(self.node(i).t);
             if i == 1 {
                 newest_spacing = spacing;
             }
-            if !(self.entry(i - 1).1 && spacing >= 0.25 * h && spacing <= 4.0 * h) {
+            if !(joined && spacing >= 0.25 * h && spacing <= 4.0 * h) {
                 break;
             }
             k += 1;
