@@ -12,6 +12,7 @@ NAN, INF = math.nan, math.inf
 # Largest accepted nondimensional value (sim.rs MAX_NONDIMENSIONAL); the tests run with
 # omega0 = 1 rad/s and delta_x = 1 m, so SI values equal nondimensional ones.
 MAX_ND = 1e6
+MIN_OMEGA = 1e-6  # the core's smallest Ω (OMEGA_RANGE)
 
 
 def stamp_of(t):
@@ -52,7 +53,8 @@ def invalid_commands(frontier, omega0=1.0, delta_x=1.0):
         "velocity_nonfinite": [sinusoid(ok_w, x) for x in (NAN, INF, -INF)],
         "velocity_negative": [sinusoid(ok_w, x) for x in (-5e-324, -1e-300, -ok_v, -1e300)],
         "velocity_huge": [sinusoid(ok_w, x) for x in (MAX_ND * lv * (1 + 1e-15), 10 * MAX_ND * lv, 1e300)],
-        "amplitude_huge": [sinusoid(a, b) for a, b in ((5e-324, ok_v), (1e-3 * w, 2e3 * lv), (1e-300, 1e-200))],
+        "omega_tiny": [sinusoid(x, ok_v) for x in (5e-324, 1e-300, MIN_OMEGA * w * (1 - 1e-15))],
+        "amplitude_huge": [sinusoid(a, b) for a, b in ((MIN_OMEGA * w, 2 * lv), (1e-3 * w, 2e3 * lv))],
         "unused_field_nonfinite": [sinusoid(ok_w, ok_v, z=NAN), sinusoid(ok_w, ok_v, zdot=-INF),
                                    cdr(sec, ns, mode=1, z=0.0, zdot=0.0, omega=NAN)],
         "external_nonfinite": [cdr(sec, ns, mode=1, z=z, zdot=zd) for z, zd in ((NAN, 0.0), (0.0, INF), (-INF, NAN))],

@@ -156,7 +156,7 @@ def test_parameter_descriptors_and_use_sim_time():
         for name, unit, lo, hi, read_only in [
                 ("zeta", "[-]", 0.0, big, False), ("e", "[-]", 0.0, 1.0, False),
                 ("omega0", "[rad/s]", 5e-324, big, True), ("delta_x", "[m]", 5e-324, big, True),
-                ("Omega", "[-]", 5e-324, big, True), ("V", "[-]", 0.0, big, True),
+                ("Omega", "[-]", 1e-6, 1e6, True), ("V", "[-]", 0.0, 1e6, True),
                 ("publish_rate", "[Hz", 5e-324, 1e6, False), ("real_time_factor", "[-]", 0.0, big, False)]:
             x = d[name]
             assert x.name == name and x.type == ParameterType.PARAMETER_DOUBLE, name

@@ -140,7 +140,7 @@ def test_hostile_commands_are_refused_and_valid_ones_applied():
                 w3, v3 = rng.uniform(1.5, 2.2), rng.uniform(0.04, 0.1)
                 pub.publish(hostile.sinusoid(w1, v1, t=at))  # the instant
                 pub.publish(hostile.sinusoid(hostile.MAX_ND, hostile.MAX_ND, t=at - 0.1))  # out of order: at
-                pub.publish(hostile.sinusoid(5e-324, -0.0))  # extreme but valid, zero stamp: at
+                pub.publish(hostile.sinusoid(hostile.MIN_OMEGA, -0.0))  # extreme but valid, zero stamp: at
                 pub.publish(hostile.odd_valid(w2, v2, t=1e-9, kind=odd_kinds[k % 3]))  # far past: at
                 pub.publish(hostile.sinusoid(w3, v3, t=at - 0.2))  # out of order: at
                 sent["valid"] += 5

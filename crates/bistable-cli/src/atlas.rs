@@ -98,7 +98,7 @@ pub struct AtlasArgs {
     #[arg(long, value_name = "A:B:N", allow_hyphen_values = true)]
     pub continue_omega: Range,
 
-    /// V of the branches the points are located on (>= 0).
+    /// V of the branches the points are located on, in [0, 1e6].
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub velocity: f64,
 
@@ -213,9 +213,7 @@ struct Line {
 
 /// Runs `bistable atlas`.
 pub fn run(args: &AtlasArgs) -> Result<(), CliError> {
-    let range = args
-        .continue_omega
-        .check("--continue-omega", |w| w > 0.0, "Ω must be > 0")?;
+    let range = args.continue_omega.omegas("--continue-omega")?;
     if !(1..=64).contains(&args.period) {
         return Err(CliError::invalid_text(
             "--period",

@@ -108,11 +108,11 @@ pub struct BifurcationArgs {
     #[arg(long, value_name = "A:B:N", allow_hyphen_values = true)]
     pub range: Range,
 
-    /// Fixed Ω when --param velocity (> 0).
+    /// Fixed Ω when --param velocity, in [1e-6, 1e6].
     #[arg(long, value_name = "OMEGA", allow_negative_numbers = true)]
     pub omega: Option<f64>,
 
-    /// Fixed V when --param omega (>= 0).
+    /// Fixed V when --param omega, in [0, 1e6].
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub velocity: Option<f64>,
 
@@ -287,17 +287,8 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
 /// The models along the range, with the fixed parameter checked.
 fn grid(args: &BifurcationArgs) -> Result<(Vec<Model>, Range), CliError> {
     let (range, fixed, fixed_name) = match args.param {
-        Param::Omega => (
-            args.range.check("--range", |w| w > 0.0, "Ω must be > 0")?,
-            args.velocity,
-            "--velocity",
-        ),
-        Param::Velocity => (
-            args.range
-                .check("--range", |v| v >= 0.0, "V must be >= 0")?,
-            args.omega,
-            "--omega",
-        ),
+        Param::Omega => (args.range.omegas("--range")?, args.velocity, "--velocity"),
+        Param::Velocity => (args.range.velocities("--range")?, args.omega, "--omega"),
     };
     let fixed = fixed.ok_or_else(|| {
         CliError::invalid_text(

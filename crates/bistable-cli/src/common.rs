@@ -77,11 +77,11 @@ pub struct ModelArgs {
 #[derive(Debug, Clone, Args)]
 #[command(next_help_heading = "Model and solver options")]
 pub struct CommonArgs {
-    /// Shaker frequency ratio Ω = Ω̂/ω0 (> 0).
+    /// Shaker frequency ratio Ω = Ω̂/ω0, in [1e-6, 1e6].
     #[arg(long, value_name = "OMEGA", allow_negative_numbers = true)]
     pub omega: f64,
 
-    /// Shaker velocity amplitude V = V̂/(ω0·Δx) (>= 0); the plate moves as z = (V/Ω)·sin(Ωτ).
+    /// Shaker velocity amplitude V = V̂/(ω0·Δx), in [0, 1e6]; the plate moves as z = (V/Ω)·sin(Ωτ).
     #[arg(long, value_name = "V", allow_negative_numbers = true)]
     pub velocity: f64,
 

@@ -61,7 +61,7 @@ pub struct EnergyMapArgs {
     #[arg(long, requires_all = ["omega", "velocity"])]
     pub overlay: bool,
 
-    /// Shaker frequency ratio Ω of the overlaid simulation (> 0).
+    /// Shaker frequency ratio Ω of the overlaid simulation, in [1e-6, 1e6].
     #[arg(
         long,
         value_name = "OMEGA",
@@ -70,7 +70,7 @@ pub struct EnergyMapArgs {
     )]
     pub omega: Option<f64>,
 
-    /// Shaker velocity amplitude V of the overlaid simulation (> 0).
+    /// Shaker velocity amplitude V of the overlaid simulation, in (0, 1e6].
     #[arg(
         long,
         value_name = "V",

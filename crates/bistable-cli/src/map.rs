@@ -151,12 +151,8 @@ struct Summary {
 
 /// Runs `bistable map`.
 pub fn run(args: &MapArgs) -> Result<(), CliError> {
-    let omegas = args
-        .omega_range
-        .check("--omega-range", |w| w > 0.0, "Ω must be > 0")?;
-    let vs = args
-        .velocity_range
-        .check("--velocity-range", |v| v >= 0.0, "V must be >= 0")?;
+    let omegas = args.omega_range.omegas("--omega-range")?;
+    let vs = args.velocity_range.velocities("--velocity-range")?;
     grid::check_size(omegas, vs, "--omega-range")?;
     let model = args.model.model(omegas.start, vs.start)?;
     let co = args.classify.options(MAP_LYAPUNOV_PERIODS)?;

@@ -97,7 +97,7 @@ Examples:
 /// Options of `bistable orbit`.
 #[derive(Debug, Clone, Args)]
 pub struct OrbitArgs {
-    /// Shaker frequency ratio Ω (> 0); not with --continue-omega.
+    /// Shaker frequency ratio Ω, in [1e-6, 1e6]; not with --continue-omega.
     #[arg(
         long,
         value_name = "OMEGA",
@@ -107,7 +107,7 @@ pub struct OrbitArgs {
     )]
     pub omega: Option<f64>,
 
-    /// Shaker velocity amplitude V (>= 0); with --continue-omega several, comma separated.
+    /// Shaker velocity amplitude V, in [0, 1e6]; with --continue-omega several, comma separated.
     #[arg(
         long,
         value_name = "V",
@@ -373,7 +373,7 @@ const ARC_HEADER: &str = "velocity,trace,index,omega,x0,v0,max_x,stable,multipli
 multiplier_1_im,multiplier_2_re,multiplier_2_im,abs_multiplier,impacts";
 
 fn continuation(args: &OrbitArgs, range: Range) -> Result<(), CliError> {
-    let range = range.check("--continue-omega", |w| w > 0.0, "Ω must be > 0")?;
+    let range = range.omegas("--continue-omega")?;
     let threads = threads(args.threads, "--threads")?;
     let width = lanes(args.lanes, "--lanes")?;
     let omegas = range.values();

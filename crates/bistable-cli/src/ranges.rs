@@ -4,6 +4,8 @@
 use std::fmt;
 use std::str::FromStr;
 
+use bistable_core::{MAX_VELOCITY, OMEGA_RANGE};
+
 use crate::error::CliError;
 
 /// Most values one range may have.
@@ -43,6 +45,25 @@ impl Range {
     /// Smallest and largest value.
     pub fn bounds(&self) -> (f64, f64) {
         (self.start.min(self.end), self.start.max(self.end))
+    }
+
+    /// [`Range::check`] for shaker frequency ratios: `Ω` in the core's [`OMEGA_RANGE`].
+    pub fn omegas(&self, option: &str) -> Result<Self, CliError> {
+        let (lo, hi) = OMEGA_RANGE;
+        self.check(
+            option,
+            |w| (lo..=hi).contains(&w),
+            "Ω must be in [1e-6, 1e6]",
+        )
+    }
+
+    /// [`Range::check`] for shaker velocity amplitudes: `V` in `[0, `[`MAX_VELOCITY`]`]`.
+    pub fn velocities(&self, option: &str) -> Result<Self, CliError> {
+        self.check(
+            option,
+            |v| (0.0..=MAX_VELOCITY).contains(&v),
+            "V must be in [0, 1e6]",
+        )
     }
 
     /// Checks that every value satisfies `ok`; the error names `option` and states `rule`.

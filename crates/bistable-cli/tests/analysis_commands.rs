@@ -953,6 +953,29 @@ fn bad_input_exits_2_naming_the_option() {
             &["map", "--velocity-range", "-0.1:0.2:5", "--plot", "x.png"],
             "--velocity-range",
         ),
+        // Beyond the core's ranges (Ω in [1e-6, 1e6], V in [0, 1e6]): refused before any point.
+        (
+            &["map", "--omega-range", "1:1e7:3", "--plot", "x.png"],
+            "--omega-range",
+        ),
+        (
+            &["map", "--velocity-range", "0.1:2e6:3", "--plot", "x.png"],
+            "--velocity-range",
+        ),
+        (
+            &[
+                "bifurcation",
+                "--param",
+                "omega",
+                "--range",
+                "1e-7:1:3",
+                "--velocity",
+                "0.07",
+                "--plot",
+                "x.png",
+            ],
+            "--range",
+        ),
         (&["map", "--threads", "0", "--plot", "x.png"], "--threads"),
         (
             &[

@@ -14,8 +14,8 @@ use crate::common::{
     threads as threads_arg,
 };
 use crate::common::{Col, Stop};
-use crate::common::{MAX_VELOCITY, OMEGA_RANGE};
 use crate::orbit::{check_period, orbit_rows};
+use bistable_core::{MAX_VELOCITY, OMEGA_RANGE};
 
 /// Most recorded cycles over all points of one call.
 const MAX_RECORDED: u64 = 100_000_000;

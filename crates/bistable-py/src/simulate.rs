@@ -353,14 +353,15 @@ fn in_clock_range(sim: &Simulator, t: f64) -> bool {
         .is_some_and(|(omega, _, origin)| omega.max(1.0) * (t - origin).abs() < MAX_CLOCK_SPAN)
 }
 
-/// Why a restored simulator is not one a run of this package can reach, if it is not: a
-/// shaker outside the package's limits, or a time or state that is not finite or beyond the
-/// clock range (checked as the FMU checks its restored states).
+/// Why a restored simulator is not one a run of this package can reach, if it is not: a plate
+/// that is not a sinusoid, a `zeta` beyond the package's limit (the core's decoding checks the
+/// shaker's own ranges), or a time or state that is not finite or beyond the clock range
+/// (checked as the FMU checks its restored states).
 fn unreachable_state(py: Python<'_>, sim: &Simulator) -> Option<String> {
-    let Some((omega, velocity, _)) = sinusoid_of(sim) else {
+    if sinusoid_of(sim).is_none() {
         return Some("the plate is not the shaker's sinusoid".into());
-    };
-    if let Err(e) = check_scope(py, omega, velocity, sim.params().zeta()) {
+    }
+    if let Err(e) = check_scope(py, sim.params().zeta()) {
         return Some(e.value(py).to_string());
     }
     let s = sim.state();
@@ -509,7 +510,7 @@ impl PySimulator {
         let (omega, velocity) = (omega.get("omega")?, velocity.get("velocity")?);
         bistable_core::Sinusoid::new(omega, velocity)
             .map_err(|e| crate::common::param_err(py, &e))?;
-        check_scope(py, omega, velocity, self.sim.params().zeta())?;
+        check_scope(py, self.sim.params().zeta())?;
         // The new sinusoid's origin is now: the clock range starts again from here.
         self.sim
             .set_sinusoid(omega, velocity)

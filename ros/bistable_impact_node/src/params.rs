@@ -1,6 +1,7 @@
 //! The node's ROS 2 parameters: names, defaults, units, validation, and reading them from
 //! `-p name:=value` and `--params-file` YAML.
 
+use bistable_core::{MAX_VELOCITY, OMEGA_RANGE};
 use ros2_client::ParameterValue;
 use yaml_rust2::{Yaml, YamlLoader};
 
@@ -48,12 +49,12 @@ pub const SPECS: [Spec; 10] = [
     },
     Spec {
         name: "Omega",
-        doc: "initial shaker frequency ratio Ω = Ω̂/ω0 [-], > 0",
+        doc: "initial shaker frequency ratio Ω = Ω̂/ω0 [-], in [1e-6, 1e6]",
         change: Change::StartUp,
     },
     Spec {
         name: "V",
-        doc: "initial shaker velocity amplitude V = V̂/(ω0 Δx) [-], >= 0",
+        doc: "initial shaker velocity amplitude V = V̂/(ω0 Δx) [-], in [0, 1e6]",
         change: Change::StartUp,
     },
     Spec {
@@ -236,8 +237,10 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
     };
     let ok = x.is_finite()
         && match name {
-            "zeta" | "V" | "real_time_factor" => x >= 0.0,
+            "zeta" | "real_time_factor" => x >= 0.0,
             "e" => (0.0..=1.0).contains(&x),
+            "Omega" => (OMEGA_RANGE.0..=OMEGA_RANGE.1).contains(&x),
+            "V" => (0.0..=MAX_VELOCITY).contains(&x),
             "publish_rate" => x > 0.0 && x <= MAX_PUBLISH_RATE,
             _ => x > 0.0,
         };

@@ -5,6 +5,7 @@
 //! floating-point and integer ranges, `read_only` for start-up parameters) and so that
 //! `use_sim_time` can be refused: this node publishes `/clock` and never follows it.
 
+use bistable_core::{MAX_VELOCITY, OMEGA_RANGE};
 use ros2_client::parameters::raw;
 use ros2_client::rcl_interfaces::ListParametersResult;
 use ros2_client::ParameterValue;
@@ -108,7 +109,9 @@ pub fn describe(name: &str) -> raw::ParameterDescriptor {
             d.r#type = raw::ParameterType::DOUBLE;
             let (range, constraint) = match name {
                 "e" => (float(0.0, 1.0), "finite"),
-                "zeta" | "V" | "real_time_factor" => (float(0.0, f64::MAX), "finite, >= 0"),
+                "zeta" | "real_time_factor" => (float(0.0, f64::MAX), "finite, >= 0"),
+                "Omega" => (float(OMEGA_RANGE.0, OMEGA_RANGE.1), "finite"),
+                "V" => (float(0.0, MAX_VELOCITY), "finite"),
                 "publish_rate" => (float(ABOVE_ZERO, MAX_PUBLISH_RATE), "> 0"),
                 _ => (float(ABOVE_ZERO, f64::MAX), "finite, > 0"),
             };

@@ -19,7 +19,7 @@ use bistable_analysis::event_log::{EventLog, Row};
 use bistable_core::units::Scale;
 use bistable_core::{
     ChatterRule, ContactMode, Event, Impact, Instant, Params, PlateMotion, PolyPiece, SetpointRamp,
-    SimError, Simulator, Sinusoid, SolverOptions,
+    SimError, Simulator, Sinusoid, SolverOptions, MAX_VELOCITY, OMEGA_RANGE,
 };
 
 use crate::inbox::num;
@@ -30,8 +30,10 @@ use crate::params::Settings;
 pub const MAX_QUEUED_COMMANDS: usize = 1024;
 /// Length of a set-point ramp [periods of the new shaker frequency].
 pub const RAMP_CYCLES: f64 = 2.0;
-/// Largest accepted nondimensional plate position, velocity, `Ω` or `V` in a command (the
-/// model is meaningful for values of order one; far larger ones only overflow the integrator).
+/// Largest accepted nondimensional plate position, velocity or displacement amplitude `V/Ω` in a
+/// command, and mass position or velocity in a reset (the model is meaningful for values of
+/// order one; far larger ones only overflow the integrator). `Ω` and `V` have the core's ranges
+/// ([`OMEGA_RANGE`], [`MAX_VELOCITY`]).
 pub const MAX_NONDIMENSIONAL: f64 = 1e6;
 
 /// The rule for the fields a mode does not use: they must be zero (so that a command meant
@@ -296,15 +298,17 @@ impl Runner {
                 unused_zero(&[("z", cmd.z), ("zdot", cmd.zdot)], "MODE_SINUSOID")?;
                 let omega = self.scale.of_frequency(cmd.omega);
                 let v = self.scale.of_velocity(cmd.velocity);
-                if !(cmd.omega > 0.0 && omega > 0.0 && omega <= MAX_NONDIMENSIONAL) {
+                // The core's ranges (`Sinusoid::new`), refused here, before the command waits.
+                let (lo, hi) = OMEGA_RANGE;
+                if !(lo..=hi).contains(&omega) {
                     return Err(format!(
-                        "omega = {} rad/s must be > 0 and at most {MAX_NONDIMENSIONAL:e}·omega0",
+                        "omega = {} rad/s must be in [{lo:e}, {hi:e}]·omega0",
                         num(cmd.omega)
                     ));
                 }
-                if !(cmd.velocity >= 0.0 && v <= MAX_NONDIMENSIONAL) {
+                if !(0.0..=MAX_VELOCITY).contains(&v) {
                     return Err(format!(
-                        "velocity = {} m/s must be >= 0 and at most {MAX_NONDIMENSIONAL:e}·omega0·delta_x",
+                        "velocity = {} m/s must be >= 0 and at most {MAX_VELOCITY:e}·omega0·delta_x",
                         num(cmd.velocity)
                     ));
                 }

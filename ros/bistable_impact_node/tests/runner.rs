@@ -265,12 +265,19 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
         (cmd(0, 0.0, 0.0, 0.1, 0.0, 0.0), "omega"),
         (cmd(0, 0.0, -1.0, 0.1, 0.0, 0.0), "omega"),
         (cmd(0, 0.0, 1e300, 0.1, 0.0, 0.0), "omega"),
-        // An in-range Ω and V whose displacement amplitude V/Ω overflows (the core could not
-        // continue the plate position with it when it became due).
+        // Beyond the core's range of Ω (a slow shaker below it, a fast one above it).
         (
             cmd(0, 0.0, 5e-324, 0.07, 0.0, 0.0),
-            "displacement amplitude",
+            "omega = 5e-324 rad/s must be in [1e-6, 1e6]·omega0",
         ),
+        (
+            cmd(0, 0.0, 1.0000000000000002e6, 0.07, 0.0, 0.0),
+            "must be in [1e-6, 1e6]·omega0",
+        ),
+        (cmd(0, 0.0, 1.0, 1.0000000000000002e6, 0.0, 0.0), "velocity"),
+        // An in-range Ω and V whose displacement amplitude V/Ω is too large (the core could not
+        // continue the plate position with it when it became due).
+        (cmd(0, 0.0, 1e-6, 2.0, 0.0, 0.0), "displacement amplitude"),
         (cmd(0, 0.0, 1e-3, 2e3, 0.0, 0.0), "displacement amplitude"),
         (cmd(0, 0.0, 1.0, 0.1, f64::NEG_INFINITY, 0.0), "z = -inf"),
         (cmd(1, 0.0, 0.0, 0.0, 0.0, nan), "zdot"),

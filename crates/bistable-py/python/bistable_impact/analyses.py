@@ -101,7 +101,7 @@ def orbit(
     (None when the orbit sticks), ``guess, guess_source, distance_to_guess``.
 
     Args:
-        omega, velocity: the shaker (``Ω > 0``, ``V >= 0``).
+        omega, velocity: the shaker (``Ω`` in ``[1e-6, 1e6]``, ``V`` in ``[0, 1e6]``).
         period: period of the orbit in shaker periods, ``[1, 64]``.
         guess: ``(x, x')`` at plate phase 0 to start Newton from; default: the section point
             after ``settle`` shaker periods from the paper's initial condition.
@@ -171,7 +171,7 @@ def continue_omega(
     Natural continuation stops at folds, so folds are found with ``method='arclength'``.
 
     Args:
-        omega: the grid of ``Ω`` (> 0), evenly spaced (e.g. :func:`bistable_impact.linspace`).
+        omega: the grid of ``Ω`` (in ``[1e-6, 1e6]``), evenly spaced (e.g. :func:`bistable_impact.linspace`).
         velocity: one ``V`` or several.
         period: ``[1, 64]`` shaker periods.
         settle: shaker periods simulated at every ``Ω`` for the seeds, ``[0, 1e6]``.
@@ -244,8 +244,8 @@ def atlas(
     curve (≤ 1e-10 when converged; see ``docs/bifurcations.md``).
 
     Args:
-        omega: the grid of ``Ω`` (> 0) the branches are continued over.
-        velocity: ``V`` of the branches (>= 0).
+        omega: the grid of ``Ω`` (in ``[1e-6, 1e6]``) the branches are continued over.
+        velocity: ``V`` of the branches (in ``[0, 1e6]``).
         velocity_bounds: ``(lo, hi)`` with ``0 <= lo < velocity < hi``.
         period: ``[1, 64]`` shaker periods.
         method: ``'natural'`` or ``'arclength'`` (through folds; needed for folds).
