@@ -510,7 +510,6 @@ impl PySimulator {
         let (omega, velocity) = (omega.get("omega")?, velocity.get("velocity")?);
         bistable_core::Sinusoid::new(omega, velocity)
             .map_err(|e| crate::common::param_err(py, &e))?;
-        check_scope(py, self.sim.params().zeta())?;
         // The new sinusoid's origin is now: the clock range starts again from here.
         self.sim
             .set_sinusoid(omega, velocity)
