@@ -306,7 +306,8 @@ impl Runner {
                         num(cmd.omega)
                     ));
                 }
-                if !(0.0..=MAX_VELOCITY).contains(&v) {
+                // The sign of the value sent: a tiny negative one may scale to −0.
+                if !(cmd.velocity >= 0.0 && v <= MAX_VELOCITY) {
                     return Err(format!(
                         "velocity = {} m/s must be >= 0 and at most {MAX_VELOCITY:e}·omega0·delta_x",
                         num(cmd.velocity)

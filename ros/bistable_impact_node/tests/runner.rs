@@ -311,6 +311,14 @@ fn bad_commands_are_refused_with_reasons_and_change_nothing() {
         nanosec: 1_000_000_000,
     };
     assert!(r.command(&bad_stamp).unwrap_err().contains("stamp"));
+    // A negative velocity that scales to −0 (ω0 = 20 rad/s) is still negative: refused.
+    let mut fast = Runner::new(&Settings {
+        omega0: 20.0,
+        ..settings(1.75, 0.07, 10.0)
+    })
+    .unwrap();
+    let err = fast.command(&cmd(0, 0.0, 35.0, -5e-324, 0.0, 0.0));
+    assert!(err.unwrap_err().contains("velocity = -5e-324"));
     // Nothing was queued: the simulation goes on with the old shaker and matches the core.
     let (impacts, _) = run_until(&mut r, 60.0);
     let reference = core_impacts(&mut paper_sim(1.75, 0.07), 60.0);
