@@ -171,6 +171,49 @@ const SHUTDOWN_ACK_STALL: Duration = Duration::from_secs(2);
 /// See [`SHUTDOWN_ACK_STALL`].
 const SHUTDOWN_ACK_LIMIT: Duration = Duration::from_secs(10);
 
+/// Publishes at shutdown the impacts still waiting for the send window (a reliable subscriber
+/// was behind when the stop came), as acknowledgements open it: they were located, so every
+/// subscriber must get them. Gives up, with a warning, after [`SHUTDOWN_ACK_STALL`] without one
+/// published, or [`SHUTDOWN_ACK_LIMIT`] in all.
+pub fn flush_impacts(
+    publisher: &Publisher<ImpactEvent>,
+    queue: &mut VecDeque<ImpactEvent>,
+    n: &mut Counters,
+    log: &Logger,
+) {
+    let start = Instant::now();
+    let mut progress = start;
+    loop {
+        let waiting = queue.len();
+        publish_impacts(publisher, queue, n, log);
+        if queue.is_empty() {
+            return;
+        }
+        let now = Instant::now();
+        if queue.len() < waiting {
+            progress = now;
+        }
+        if now - progress >= SHUTDOWN_ACK_STALL || now - start >= SHUTDOWN_ACK_LIMIT {
+            log.log(
+                LogLevel::Warn,
+                &format!(
+                    "impacts: {} located not published: the send window stayed full for {:.3} s",
+                    queue.len(),
+                    (now - progress).as_secs_f64()
+                ),
+            );
+            return;
+        }
+        // Returns as soon as everything sent is acknowledged, which opens the window.
+        if publisher
+            .wait_for_acknowledgments(Duration::from_millis(10))
+            .is_err()
+        {
+            std::thread::sleep(Duration::from_millis(10));
+        }
+    }
+}
+
 /// Waits for the impact subscribers' acknowledgements at shutdown ([`SHUTDOWN_ACK_STALL`]) and
 /// logs the outcome: all `published` impacts acknowledged, or how many were not.
 pub fn await_acknowledgements(

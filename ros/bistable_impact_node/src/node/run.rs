@@ -14,8 +14,8 @@ use ros2_client::dds::rustdds::mio1::{Poll, Waker};
 
 use super::dds::Dds;
 use super::publish::{
-    answer_step, answer_step_done, await_acknowledgements, publish_impacts, publish_tick,
-    MatchedReaders, STATUS_POLL,
+    answer_step, answer_step_done, await_acknowledgements, flush_impacts, publish_impacts,
+    publish_tick, MatchedReaders, STATUS_POLL,
 };
 use super::serve::{register_wakeups, Inbox, State, STOP_TOKEN};
 
@@ -178,6 +178,7 @@ impl Loop<'_> {
         if let Some(job) = st.control.abort_step() {
             answer_step(&d.services, &st, job, "the node is stopping", &d.log);
         }
+        flush_impacts(&d.impact_pub, &mut st.impacts, &mut st.n, &d.log);
         let LoopState { runner, n, .. } = st;
         d.log.log(
             LogLevel::Info,
