@@ -171,35 +171,68 @@ const SHUTDOWN_ACK_STALL: Duration = Duration::from_secs(2);
 /// See [`SHUTDOWN_ACK_STALL`].
 const SHUTDOWN_ACK_LIMIT: Duration = Duration::from_secs(10);
 
+/// How long a wait at shutdown goes on: it gives up after [`SHUTDOWN_ACK_STALL`] without
+/// progress (fewer items left than ever before) or [`SHUTDOWN_ACK_LIMIT`] in all.
+struct Patience {
+    start: Instant,
+    progress: Instant,
+    left: u64,
+}
+
+impl Patience {
+    /// A wait starting now with `left` items to go.
+    fn new(left: u64) -> Self {
+        let now = Instant::now();
+        Self {
+            start: now,
+            progress: now,
+            left,
+        }
+    }
+
+    /// Notes that `left` items are still to go; whether the wait should give up.
+    fn exhausted(&mut self, left: u64) -> bool {
+        let now = Instant::now();
+        if left < self.left {
+            self.left = left;
+            self.progress = now;
+        }
+        now - self.progress >= SHUTDOWN_ACK_STALL || now - self.start >= SHUTDOWN_ACK_LIMIT
+    }
+
+    /// Seconds since the wait started.
+    fn waited(&self) -> f64 {
+        self.start.elapsed().as_secs_f64()
+    }
+
+    /// Seconds since the last progress.
+    fn stalled(&self) -> f64 {
+        self.progress.elapsed().as_secs_f64()
+    }
+}
+
 /// Publishes at shutdown the impacts still waiting for the send window (a reliable subscriber
 /// was behind when the stop came), as acknowledgements open it: they were located, so every
-/// subscriber must get them. Gives up, with a warning, after [`SHUTDOWN_ACK_STALL`] without one
-/// published, or [`SHUTDOWN_ACK_LIMIT`] in all.
+/// subscriber must get them. Gives up, with a warning, as [`Patience`] says.
 pub fn flush_impacts(
     publisher: &Publisher<ImpactEvent>,
     queue: &mut VecDeque<ImpactEvent>,
     n: &mut Counters,
     log: &Logger,
 ) {
-    let start = Instant::now();
-    let mut progress = start;
+    let mut patience = Patience::new(queue.len() as u64);
     loop {
-        let waiting = queue.len();
         publish_impacts(publisher, queue, n, log);
         if queue.is_empty() {
             return;
         }
-        let now = Instant::now();
-        if queue.len() < waiting {
-            progress = now;
-        }
-        if now - progress >= SHUTDOWN_ACK_STALL || now - start >= SHUTDOWN_ACK_LIMIT {
+        if patience.exhausted(queue.len() as u64) {
             log.log(
                 LogLevel::Warn,
                 &format!(
                     "impacts: {} located not published: the send window stayed full for {:.3} s",
                     queue.len(),
-                    (now - progress).as_secs_f64()
+                    patience.stalled()
                 ),
             );
             return;
@@ -214,17 +247,15 @@ pub fn flush_impacts(
     }
 }
 
-/// Waits for the impact subscribers' acknowledgements at shutdown ([`SHUTDOWN_ACK_STALL`]) and
-/// logs the outcome: all `published` impacts acknowledged, or how many were not.
+/// Waits for the impact subscribers' acknowledgements at shutdown (as long as [`Patience`]
+/// lasts) and logs the outcome: all `published` impacts acknowledged, or how many were not.
 pub fn await_acknowledgements(
     publisher: &Publisher<ImpactEvent>,
     subscribers: usize,
     published: u64,
     log: &Logger,
 ) {
-    let start = Instant::now();
-    let mut progress = start;
-    let mut missing = publisher.unacknowledged_count();
+    let mut patience = Patience::new(publisher.unacknowledged_count());
     loop {
         match publisher.wait_for_acknowledgments(Duration::from_millis(100)) {
             Ok(true) => {
@@ -234,7 +265,7 @@ pub fn await_acknowledgements(
                         &format!(
                             "impacts: all {published} published acknowledged by the {subscribers} \
                              matched subscriptions in {:.3} s",
-                            start.elapsed().as_secs_f64()
+                            patience.waited()
                         ),
                     );
                 }
@@ -249,19 +280,14 @@ pub fn await_acknowledgements(
                 return;
             }
         }
-        let now = Instant::now();
         let left = publisher.unacknowledged_count();
-        if left < missing {
-            missing = left;
-            progress = now;
-        }
-        if now - progress >= SHUTDOWN_ACK_STALL || now - start >= SHUTDOWN_ACK_LIMIT {
+        if patience.exhausted(left) {
             log.log(
                 LogLevel::Warn,
                 &format!(
                     "impacts: {left} of {published} published not acknowledged by every matched \
                      subscription after {:.3} s ({} s without progress, or {} s in all)",
-                    (now - start).as_secs_f64(),
+                    patience.waited(),
                     SHUTDOWN_ACK_STALL.as_secs(),
                     SHUTDOWN_ACK_LIMIT.as_secs()
                 ),
