@@ -18,12 +18,12 @@ the sweeps.
 
 Every argument is checked before any work: a bad value raises ``ValueError`` (a wrong type
 ``TypeError``) naming the argument, with the CLI's rule text; a failed simulation raises
-``RuntimeError``. The model is kept in the FMU's ranges (``Ω`` in ``[1e-6, 1e6]`` and ``V`` in
-``[0, 1e6]``, the core's ranges, as in the CLI; beyond the CLI's rules ``ζ`` in ``[0, 10]``) and caps work sizes
-(grids 1e7 points as the CLI, transients 1e6 shaker periods, ...; the README's Python section
-lists them). Computations release the GIL; Ctrl-C raises ``KeyboardInterrupt`` within about
-20 ms, also inside the runs of the sweeps, the continuation and the bifurcation data on their
-worker threads.
+``RuntimeError``. The package keeps the model in the FMU's ranges (``Ω`` in ``[1e-6, 1e6]`` and
+``V`` in ``[0, 1e6]``, the core's ranges, as in the CLI; beyond the CLI's rules ``ζ`` in
+``[0, 10]``) and caps work sizes (grids 1e7 points as the CLI, transients 1e6 shaker periods,
+...; the README's Python section lists them). Computations release the GIL; Ctrl-C raises
+``KeyboardInterrupt`` within about 20 ms, also inside the runs of the sweeps, the continuation
+and the bifurcation data on their worker threads.
 """
 
 from __future__ import annotations
