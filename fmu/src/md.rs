@@ -73,7 +73,8 @@ mod tests {
             let v = VARS.iter().find(|v| v.name == name).expect("declared");
             (v.min, v.max)
         };
-        assert_eq!(range("Omega"), bistable_core::OMEGA_RANGE);
+        let omega = bistable_core::OMEGA_RANGE;
+        assert_eq!(range("Omega"), (*omega.start(), *omega.end()));
         assert_eq!(range("V"), (0.0, bistable_core::MAX_VELOCITY));
     }
 }

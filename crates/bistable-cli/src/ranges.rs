@@ -49,10 +49,9 @@ impl Range {
 
     /// [`Range::check`] for shaker frequency ratios: `Ω` in the core's [`OMEGA_RANGE`].
     pub fn omegas(&self, option: &str) -> Result<Self, CliError> {
-        let (lo, hi) = OMEGA_RANGE;
         self.check(
             option,
-            |w| (lo..=hi).contains(&w),
+            |w| OMEGA_RANGE.contains(&w),
             "Ω must be in [1e-6, 1e6]",
         )
     }

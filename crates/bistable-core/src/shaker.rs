@@ -3,6 +3,8 @@
 //! The integrator needs the plate's normalised Taylor coefficients `z_k = z^(k)(τ)/k!` at the start
 //! of each step; both kinds provide them exactly (up to rounding).
 
+use std::ops::RangeInclusive;
+
 use crate::params::{check, ParamError};
 use crate::taylor::BUF;
 use crate::time::Instant;
@@ -14,7 +16,7 @@ pub const MAX_POLY_DEGREE: usize = 5;
 /// it the free flight's error grows with `Ω` (against a DOP853 run at `rtol = 1e-14`, after 0.5
 /// time units: 3e-12 in `v` at `Ω = 1e6`, 1e-10 at 1e8, 1e-4 at 1e10), and a run's work grows as
 /// `Ω` times its length (130,000 steps for 0.5 time units at 1e6).
-pub const OMEGA_RANGE: (f64, f64) = (1e-6, 1e6);
+pub const OMEGA_RANGE: RangeInclusive<f64> = 1e-6..=1e6;
 
 /// Largest shaker velocity amplitude `V` a [`Sinusoid`] accepts (the FMU's `V`).
 pub const MAX_VELOCITY: f64 = 1e6;
@@ -35,12 +37,11 @@ impl Sinusoid {
     /// Frequency ratio `Ω` in [`OMEGA_RANGE`] and velocity amplitude `V` in
     /// `[0, `[`MAX_VELOCITY`]`]` (both nondimensional).
     pub fn new(omega: f64, velocity: f64) -> Result<Self, ParamError> {
-        let (lo, hi) = OMEGA_RANGE;
         Ok(Self {
             omega: check(
                 "omega",
                 omega,
-                (lo..=hi).contains(&omega),
+                OMEGA_RANGE.contains(&omega),
                 "must be in [1e-6, 1e6]",
             )?,
             velocity: check(

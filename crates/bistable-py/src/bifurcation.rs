@@ -58,10 +58,9 @@ pub(crate) fn bifurcation<'py>(
     if values.is_empty() {
         return Err(invalid_text("values", "[]", "must have at least one value"));
     }
-    let (lo, hi) = OMEGA_RANGE;
     for &x in &values {
         let (ok, rule) = if by_omega {
-            ((lo..=hi).contains(&x), "Ω must be in [1e-6, 1e6]")
+            (OMEGA_RANGE.contains(&x), "Ω must be in [1e-6, 1e6]")
         } else {
             ((0.0..=MAX_VELOCITY).contains(&x), "V must be in [0, 1e6]")
         };

@@ -239,7 +239,7 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
         && match name {
             "zeta" | "real_time_factor" => x >= 0.0,
             "e" => (0.0..=1.0).contains(&x),
-            "Omega" => (OMEGA_RANGE.0..=OMEGA_RANGE.1).contains(&x),
+            "Omega" => OMEGA_RANGE.contains(&x),
             "V" => (0.0..=MAX_VELOCITY).contains(&x),
             "publish_rate" => x > 0.0 && x <= MAX_PUBLISH_RATE,
             _ => x > 0.0,

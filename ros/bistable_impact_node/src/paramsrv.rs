@@ -110,7 +110,7 @@ pub fn describe(name: &str) -> raw::ParameterDescriptor {
             let (range, constraint) = match name {
                 "e" => (float(0.0, 1.0), "finite"),
                 "zeta" | "real_time_factor" => (float(0.0, f64::MAX), "finite, >= 0"),
-                "Omega" => (float(OMEGA_RANGE.0, OMEGA_RANGE.1), "finite"),
+                "Omega" => (float(*OMEGA_RANGE.start(), *OMEGA_RANGE.end()), "finite"),
                 "V" => (float(0.0, MAX_VELOCITY), "finite"),
                 "publish_rate" => (float(ABOVE_ZERO, MAX_PUBLISH_RATE), "> 0"),
                 _ => (float(ABOVE_ZERO, f64::MAX), "finite, > 0"),

@@ -299,11 +299,12 @@ impl Runner {
                 let omega = self.scale.of_frequency(cmd.omega);
                 let v = self.scale.of_velocity(cmd.velocity);
                 // The core's ranges (`Sinusoid::new`), refused here, before the command waits.
-                let (lo, hi) = OMEGA_RANGE;
-                if !(lo..=hi).contains(&omega) {
+                if !OMEGA_RANGE.contains(&omega) {
                     return Err(format!(
-                        "omega = {} rad/s must be in [{lo:e}, {hi:e}]·omega0",
-                        num(cmd.omega)
+                        "omega = {} rad/s must be in [{:e}, {:e}]·omega0",
+                        num(cmd.omega),
+                        OMEGA_RANGE.start(),
+                        OMEGA_RANGE.end()
                     ));
                 }
                 // The sign of the value sent: a tiny negative one may scale to −0.
