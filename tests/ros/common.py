@@ -61,6 +61,19 @@ class NodeProcess:
     def alive(self):
         return self.proc.poll() is None
 
+    def wait_for_line(self, needle, timeout):
+        """Waits until a line of the log so far contains `needle`; returns that line, or None
+        after `timeout` seconds or when the node has exited."""
+        end = time.monotonic() + timeout
+        while time.monotonic() < end:
+            for line in self._head + self._tail[-self._keep:]:
+                if needle in line:
+                    return line
+            if not self.alive():
+                return None
+            time.sleep(0.01)
+        return None
+
     def interrupt(self):
         """Sends SIGINT (the node then stops by itself; `stop` collects it)."""
         if self.alive():

@@ -90,12 +90,14 @@ impl DiagnosticsClock {
     }
 }
 
-/// The status level and message: ERROR when halted, else OK stepping or paused, WARN when a
-/// tick of the last period was more than [`BEHIND`] late, else OK running.
+/// The status level and message: ERROR when halted, else OK stepping, paused or held at the
+/// start gate (`held`: its status), WARN when a tick of the last period was more than
+/// [`BEHIND`] late, else OK running.
 pub fn status(
     halted: Option<&str>,
     stepping: bool,
     paused: bool,
+    held: Option<String>,
     window_lateness: Duration,
 ) -> (u8, String) {
     if let Some(why) = halted {
@@ -104,6 +106,8 @@ pub fn status(
         (DiagnosticStatus::OK, "stepping".to_owned())
     } else if paused {
         (DiagnosticStatus::OK, "paused".to_owned())
+    } else if let Some(held) = held {
+        (DiagnosticStatus::OK, held)
     } else if window_lateness > BEHIND {
         (
             DiagnosticStatus::WARN,
@@ -128,6 +132,7 @@ pub fn report<Id>(
         r.halted(),
         st.control.stepping(),
         st.control.paused(),
+        st.gate.as_ref().map(|g| g.status()),
         n.window_lateness,
     );
     let kv = |key: &str, value: String| KeyValue {
@@ -193,17 +198,29 @@ mod tests {
         let ms = Duration::from_millis;
         let late = ms(500);
         assert_eq!(
-            status(Some("boom"), true, true, late),
+            status(Some("boom"), true, true, None, late),
             (ERROR, "halted: boom".to_owned())
         );
-        assert_eq!(status(None, true, true, late), (OK, "stepping".to_owned()));
-        assert_eq!(status(None, false, true, late), (OK, "paused".to_owned()));
-        assert_eq!(status(None, false, false, late).0, WARN);
         assert_eq!(
-            status(None, false, false, BEHIND),
+            status(None, true, true, None, late),
+            (OK, "stepping".to_owned())
+        );
+        assert_eq!(
+            status(None, false, true, None, late),
+            (OK, "paused".to_owned())
+        );
+        assert_eq!(status(None, false, false, None, late).0, WARN);
+        assert_eq!(
+            status(None, false, false, None, BEHIND),
             (OK, "running".to_owned())
         );
-        assert_eq!(status(None, false, false, BEHIND + ms(1)).0, WARN);
+        assert_eq!(status(None, false, false, None, BEHIND + ms(1)).0, WARN);
+        let held = || Some("waiting for impact subscriptions (0 of 1 matched)".to_owned());
+        assert_eq!(
+            status(None, false, false, held(), late),
+            (OK, held().unwrap())
+        );
+        assert_eq!(status(None, false, true, held(), late).1, "paused");
     }
 
     #[test]

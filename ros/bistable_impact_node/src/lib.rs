@@ -15,4 +15,5 @@ pub mod params;
 pub mod paramset;
 pub mod paramsrv;
 pub mod sim;
+pub mod startgate;
 pub mod state;

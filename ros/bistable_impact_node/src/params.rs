@@ -26,7 +26,7 @@ pub struct Spec {
 }
 
 /// Every parameter the node declares (besides the built-in `use_sim_time`).
-pub const SPECS: [Spec; 10] = [
+pub const SPECS: [Spec; 12] = [
     Spec {
         name: "zeta",
         doc: "damping ratio ζ [-], >= 0",
@@ -78,11 +78,35 @@ pub const SPECS: [Spec; 10] = [
               [1, 8192]",
         change: Change::StartUp,
     },
+    Spec {
+        name: "wait_for_impact_subscriptions",
+        doc: "impact subscriptions the simulation waits for at t = 0 before it starts [-], \
+              integer in [0, 1000] (0: start at once)",
+        change: Change::StartUp,
+    },
+    Spec {
+        name: "wait_for_impact_subscriptions_timeout",
+        doc: "longest wait for those subscriptions [s of wall time], >= 0 (0: no limit); \
+              the simulation then starts with those matched",
+        change: Change::StartUp,
+    },
 ];
 
 /// Largest `history_depth`: RustDDS's writer keeps at most 8192 (+ 1) samples
 /// (`DEFAULT_WRITER_MAX_SAMPLES`; ros2-client sets no resource limits).
 pub const MAX_HISTORY_DEPTH: i64 = 8192;
+
+/// Largest `wait_for_impact_subscriptions`.
+pub const MAX_WAIT_FOR_SUBSCRIPTIONS: i64 = 1000;
+
+/// The valid values of an integer parameter; `None` for the other parameters.
+pub fn integer_range(name: &str) -> Option<std::ops::RangeInclusive<i64>> {
+    match name {
+        "history_depth" => Some(1..=MAX_HISTORY_DEPTH),
+        "wait_for_impact_subscriptions" => Some(0..=MAX_WAIT_FOR_SUBSCRIPTIONS),
+        _ => None,
+    }
+}
 
 /// Parameter values (see [`SPECS`] for units).
 #[derive(Debug, Clone, PartialEq)]
@@ -107,11 +131,16 @@ pub struct Settings {
     pub frame_id: String,
     /// Impacts kept for late-joining subscribers (the impact writer's KEEP_LAST depth).
     pub history_depth: i64,
+    /// Impact subscriptions to wait for at t = 0 before the simulation starts (0: none).
+    pub wait_for_impact_subscriptions: i64,
+    /// Longest such wait [s of wall time] (0: no limit).
+    pub wait_for_impact_subscriptions_timeout: f64,
 }
 
 impl Default for Settings {
     /// The paper's baseline (ζ = 0.02, e = 0.85, Ω = 1.75, V = 0.07) in nondimensional units
-    /// (ω0 = 1 rad/s, Δx = 1 m), 100 Hz, real time, a history of 1000 impacts.
+    /// (ω0 = 1 rad/s, Δx = 1 m), 100 Hz, real time, a history of 1000 impacts, started at
+    /// once.
     fn default() -> Self {
         Self {
             zeta: 0.02,
@@ -124,6 +153,8 @@ impl Default for Settings {
             real_time_factor: 1.0,
             frame_id: "shaker_base".to_owned(),
             history_depth: 1000,
+            wait_for_impact_subscriptions: 0,
+            wait_for_impact_subscriptions_timeout: 0.0,
         }
     }
 }
@@ -154,6 +185,12 @@ impl Settings {
             "real_time_factor" => d(self.real_time_factor),
             "frame_id" => ParameterValue::String(self.frame_id.clone()),
             "history_depth" => ParameterValue::Integer(self.history_depth),
+            "wait_for_impact_subscriptions" => {
+                ParameterValue::Integer(self.wait_for_impact_subscriptions)
+            }
+            "wait_for_impact_subscriptions_timeout" => {
+                d(self.wait_for_impact_subscriptions_timeout)
+            }
             _ => return None,
         })
     }
@@ -164,6 +201,9 @@ impl Settings {
         match (name, value) {
             ("frame_id", ParameterValue::String(s)) => self.frame_id = s.clone(),
             ("history_depth", ParameterValue::Integer(i)) => self.history_depth = *i,
+            ("wait_for_impact_subscriptions", ParameterValue::Integer(i)) => {
+                self.wait_for_impact_subscriptions = *i
+            }
             (_, ParameterValue::Double(x)) => {
                 let slot = match name {
                     "zeta" => &mut self.zeta,
@@ -173,6 +213,9 @@ impl Settings {
                     "Omega" => &mut self.omega,
                     "V" => &mut self.v,
                     "publish_rate" => &mut self.publish_rate,
+                    "wait_for_impact_subscriptions_timeout" => {
+                        &mut self.wait_for_impact_subscriptions_timeout
+                    }
                     _ => &mut self.real_time_factor,
                 };
                 *slot = *x;
@@ -220,10 +263,10 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
             )),
         };
     }
-    if name == "history_depth" {
+    if let Some(range) = integer_range(name) {
         return match value {
-            ParameterValue::Integer(i) if (1..=MAX_HISTORY_DEPTH).contains(i) => Ok(()),
-            other => Err(format!("invalid history_depth = {other:?}: {}", spec.doc)),
+            ParameterValue::Integer(i) if range.contains(i) => Ok(()),
+            other => Err(format!("invalid {name} = {other:?}: {}", spec.doc)),
         };
     }
     let x = match value {
@@ -237,7 +280,7 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
     };
     let ok = x.is_finite()
         && match name {
-            "zeta" | "real_time_factor" => x >= 0.0,
+            "zeta" | "real_time_factor" | "wait_for_impact_subscriptions_timeout" => x >= 0.0,
             "e" => (0.0..=1.0).contains(&x),
             "Omega" => OMEGA_RANGE.contains(&x),
             "V" => (0.0..=MAX_VELOCITY).contains(&x),
@@ -256,7 +299,7 @@ pub fn check(name: &str, value: &ParameterValue) -> Result<(), String> {
 pub fn from_yaml(name: &str, y: &Yaml) -> Result<ParameterValue, String> {
     let is_string = name == "frame_id";
     let v = match y {
-        Yaml::Integer(i) if name == "history_depth" => ParameterValue::Integer(*i),
+        Yaml::Integer(i) if integer_range(name).is_some() => ParameterValue::Integer(*i),
         Yaml::Real(s) => match y.as_f64() {
             Some(x) if !is_string => ParameterValue::Double(x),
             _ => ParameterValue::String(s.clone()),
@@ -391,6 +434,47 @@ mod tests {
         s.set("history_depth", &ParameterValue::Integer(1500))
             .unwrap();
         assert_eq!(s.history_depth, 1500);
+        for bad in [
+            ParameterValue::Integer(-1),
+            ParameterValue::Integer(MAX_WAIT_FOR_SUBSCRIPTIONS + 1),
+            ParameterValue::Double(2.0),
+        ] {
+            let err = s.set("wait_for_impact_subscriptions", &bad).unwrap_err();
+            assert!(
+                err.contains("invalid wait_for_impact_subscriptions"),
+                "{err}"
+            );
+        }
+        s.set("wait_for_impact_subscriptions", &ParameterValue::Integer(3))
+            .unwrap();
+        for bad in [-1.0, f64::NAN, f64::INFINITY] {
+            let err = s
+                .set(
+                    "wait_for_impact_subscriptions_timeout",
+                    &ParameterValue::Double(bad),
+                )
+                .unwrap_err();
+            assert!(
+                err.contains("wait_for_impact_subscriptions_timeout"),
+                "{err}"
+            );
+        }
+        s.set(
+            "wait_for_impact_subscriptions_timeout",
+            &ParameterValue::Double(12.5),
+        )
+        .unwrap();
+        assert_eq!(
+            (
+                s.wait_for_impact_subscriptions,
+                s.wait_for_impact_subscriptions_timeout
+            ),
+            (3, 12.5)
+        );
+        assert!(s
+            .check_runtime("wait_for_impact_subscriptions", &ParameterValue::Integer(0))
+            .unwrap_err()
+            .contains("fixed at start-up"));
         assert!(s
             .check_runtime("history_depth", &ParameterValue::Integer(1000))
             .unwrap_err()
@@ -430,6 +514,10 @@ mod tests {
         assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Double(50.0));
         let (n, y) = parse_assignment("history_depth:=2000").unwrap();
         assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Integer(2000));
+        let (n, y) = parse_assignment("wait_for_impact_subscriptions:=2").unwrap();
+        assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Integer(2));
+        let (n, y) = parse_assignment("wait_for_impact_subscriptions_timeout:=30").unwrap();
+        assert_eq!(from_yaml(&n, &y).unwrap(), ParameterValue::Double(30.0));
         let (n, y) = parse_assignment("frame_id:=123").unwrap();
         assert_eq!(
             from_yaml(&n, &y).unwrap(),

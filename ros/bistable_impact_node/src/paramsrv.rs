@@ -10,7 +10,7 @@ use ros2_client::parameters::raw;
 use ros2_client::rcl_interfaces::ListParametersResult;
 use ros2_client::ParameterValue;
 
-use crate::params::{self, Change, Settings, MAX_HISTORY_DEPTH, MAX_PUBLISH_RATE, SPECS};
+use crate::params::{self, Change, Settings, MAX_PUBLISH_RATE, SPECS};
 
 /// The built-in parameter every ROS 2 node has.
 pub const USE_SIM_TIME: &str = "use_sim_time";
@@ -95,13 +95,13 @@ pub fn describe(name: &str) -> raw::ParameterDescriptor {
             step: 0.0,
         }]
     };
-    match name {
-        "frame_id" => d.r#type = raw::ParameterType::STRING,
-        "history_depth" => {
+    match (name, params::integer_range(name)) {
+        ("frame_id", _) => d.r#type = raw::ParameterType::STRING,
+        (_, Some(range)) => {
             d.r#type = raw::ParameterType::INTEGER;
             d.integer_range = vec![raw::IntegerRange {
-                from_value: 1,
-                to_value: MAX_HISTORY_DEPTH,
+                from_value: *range.start(),
+                to_value: *range.end(),
                 step: 1,
             }];
         }
@@ -109,7 +109,9 @@ pub fn describe(name: &str) -> raw::ParameterDescriptor {
             d.r#type = raw::ParameterType::DOUBLE;
             let (range, constraint) = match name {
                 "e" => (float(0.0, 1.0), "finite"),
-                "zeta" | "real_time_factor" => (float(0.0, f64::MAX), "finite, >= 0"),
+                "zeta" | "real_time_factor" | "wait_for_impact_subscriptions_timeout" => {
+                    (float(0.0, f64::MAX), "finite, >= 0")
+                }
                 "Omega" => (float(*OMEGA_RANGE.start(), *OMEGA_RANGE.end()), "finite"),
                 "V" => (float(0.0, MAX_VELOCITY), "finite"),
                 "publish_rate" => (float(ABOVE_ZERO, MAX_PUBLISH_RATE), "> 0"),
@@ -163,6 +165,8 @@ pub fn check_set(settings: &Settings, name: &str, value: &ParameterValue) -> Res
 mod tests {
     use super::*;
 
+    use crate::params::{MAX_HISTORY_DEPTH, MAX_WAIT_FOR_SUBSCRIPTIONS};
+
     #[test]
     fn descriptors_have_units_ranges_and_read_only() {
         for name in names() {
@@ -204,6 +208,18 @@ mod tests {
             ),
             (true, 1, MAX_HISTORY_DEPTH)
         );
+        let w = describe("wait_for_impact_subscriptions");
+        assert_eq!(
+            (
+                w.read_only,
+                w.integer_range[0].from_value,
+                w.integer_range[0].to_value
+            ),
+            (true, 0, MAX_WAIT_FOR_SUBSCRIPTIONS)
+        );
+        let t = describe("wait_for_impact_subscriptions_timeout");
+        assert!(t.read_only && t.description.contains("wall time"));
+        assert_eq!(t.floating_point_range[0].from_value, 0.0);
         let r = &describe("publish_rate").floating_point_range[0];
         assert_eq!(r.to_value, MAX_PUBLISH_RATE);
         assert!(params::check("publish_rate", &ParameterValue::Double(0.0)).is_err());

@@ -14,6 +14,7 @@ use crate::msg::ImpactEvent;
 use crate::pacer::Pacer;
 use crate::params::Settings;
 use crate::sim::Runner;
+use crate::startgate::StartGate;
 
 /// Per-message log lines (commands accepted, refused, applied; service requests) let through
 /// per second; the others are counted and summarised once a second (the totals are in the
@@ -35,12 +36,20 @@ pub struct LoopState<Id> {
     pub last_due: Option<Instant>,
     /// Log lines about service requests, limited to [`LOG_BUDGET`] a second.
     pub request_log: Throttle,
+    /// Closed while the simulation waits at t = 0 for its impact subscriptions.
+    pub gate: Option<StartGate>,
 }
 
 impl<Id> LoopState<Id> {
-    /// Running, unpaused, at the start of `runner`'s simulation with `settings`.
+    /// Running, unpaused, at the start of `runner`'s simulation with `settings`; held at the
+    /// start gate if `settings` ask for impact subscriptions first.
     pub fn new(runner: Runner, settings: Settings) -> Self {
         Self {
+            gate: StartGate::new(
+                settings.wait_for_impact_subscriptions,
+                settings.wait_for_impact_subscriptions_timeout,
+                Instant::now(),
+            ),
             pacer: Pacer::new(settings.real_time_factor, runner.now()),
             settings,
             runner,

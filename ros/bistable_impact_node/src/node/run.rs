@@ -54,6 +54,9 @@ pub fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
         fresh: Vec::new(),
     };
     lp.publish_tick(&mut st);
+    if let Some(gate) = &st.gate {
+        dds.log.log(LogLevel::Info, &gate.announcement());
+    }
     while !stop.load(Ordering::Relaxed) {
         lp.iterate(&mut st);
     }
@@ -106,6 +109,9 @@ impl Loop<'_> {
             self.publish_tick(st);
             self.last_outcome = Outcome::Tick;
         }
+        if self.held(st) {
+            return;
+        }
         publish_impacts(&d.impact_pub, &mut st.impacts, &mut st.n, &d.log);
         if !st.impacts.is_empty() {
             // A reliable subscriber is behind: wait for it rather than lose an impact.
@@ -129,6 +135,32 @@ impl Loop<'_> {
             Outcome::Blocked | Outcome::Halted => self.stalled(st, outcome),
         }
         self.last_outcome = outcome;
+    }
+
+    /// Whether the simulation is still held at the start gate (commands and requests are
+    /// served meanwhile, for a few ms); logs how the gate opened.
+    fn held(&mut self, st: &mut State) -> bool {
+        let Some(gate) = st.gate.as_mut() else {
+            return false;
+        };
+        let matched = self.dds.impact_pub.matched_reader_count();
+        match gate.check(matched, Instant::now()) {
+            None => {
+                self.wait(st, 5);
+                true
+            }
+            Some(opened) => {
+                let level = if opened.timed_out() {
+                    LogLevel::Warn
+                } else {
+                    LogLevel::Info
+                };
+                self.dds.log.log(level, &opened.message());
+                st.gate = None;
+                st.repace();
+                false
+            }
+        }
     }
 
     /// After a tick: publish it, count its lateness, then finish a step or wait until due.

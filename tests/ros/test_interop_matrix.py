@@ -1,0 +1,141 @@
+"""Every impact to every reliable subscriber, with each DDS vendor, started the way users start
+it: subscriber processes (Cyclone DDS, Fast DDS through rclpy, or both) and a free-running node
+(real_time_factor 0) are started together, as one launch file starts them; the node holds the
+simulation at t = 0 until they are matched (`wait_for_impact_subscriptions`, the README's way to
+start a lossless free-running run), and nothing in the test freezes or paces it.
+
+Each subscriber process (impact_reader.py) has a reliable, transient-local, keep-all reader from
+its start and, about a second into the stream, a second one joining in the same process (the
+case where a DDS implementation shares what it receives among its readers). The run ends by
+SIGINT while impacts stream; the node must publish every impact it located and wait for every
+acknowledgement; then the processes drain and write what they got. Checks: the node's summary
+(located = published, none failed, all acknowledged by every matched subscription), every
+early reader has exactly the indices 0..N-1, equal to the core's impacts to 1e-12, and every late
+reader a contiguous run up to N-1 that starts at least `history_depth` back (or at 0).
+
+Cases: Cyclone-only, Fast DDS-only, mixed, and mixed with one process stalled (SIGSTOP for
+STALL_SECONDS, SIGCONT: the node waits for it, nothing is lost anywhere), in the chatter case
+(Omega 0.2, V 0.05, the fastest stream). MATRIX_REPEAT (1) runs each that many times (make
+stress-ros: 20); MATRIX_SECONDS (3) of streaming. Figures printed as MATRIX {...} lines."""
+import json
+import os
+import signal
+import subprocess
+import sys
+import time
+
+import pytest
+from common import IMPACT_FIELDS, NodeProcess, _die_with_parent, reference, report_file, summary
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+SECONDS = float(os.environ.get("MATRIX_SECONDS", "3"))
+REPEAT = int(os.environ.get("MATRIX_REPEAT", "1"))
+STALL_SECONDS = 2.0
+DEPTH = 1000
+CHATTER = (0.2, 0.05)
+CASES = {
+    "cyclone": ["cyclone", "cyclone"],
+    "fastdds": ["fastdds", "fastdds"],
+    "mixed": ["cyclone", "fastdds"],
+    "mixed_stalled": ["cyclone", "fastdds", "cyclone"],
+}
+
+
+class Reader:
+    """One impact_reader.py process."""
+
+    def __init__(self, vendor, domain, out):
+        self.vendor, self.out = vendor, out
+        self.proc = subprocess.Popen([sys.executable, os.path.join(HERE, "impact_reader.py"), vendor, str(domain), out],
+                                     stdout=subprocess.PIPE, text=True, preexec_fn=_die_with_parent)
+
+    def signal(self, sig):
+        self.proc.send_signal(sig)
+
+    def collect(self):
+        """Stops it and returns {reader name: {"joined_after", "rows"}}."""
+        self.proc.send_signal(signal.SIGTERM)
+        try:
+            self.proc.wait(timeout=60)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+        assert self.proc.returncode == 0, (self.vendor, self.proc.returncode)
+        with open(self.out) as f:
+            return json.load(f)
+
+
+def check_rows(rows, ref, first, last, name):
+    """`rows` hold the impacts first..last, each once, in order, equal to the reference."""
+    indices = [r[0] for r in rows]
+    assert indices == list(range(first, last + 1)), (
+        f"{name}: {len(indices)} received, expected {first}..{last}; missing "
+        f"{sorted(set(range(first, last + 1)) - set(indices))[:10]}, duplicated {len(indices) - len(set(indices))}")
+    for r in rows:
+        want = ref[r[0]]
+        for k, f in enumerate(IMPACT_FIELDS, start=1):
+            assert abs(r[k] - want[f]) <= 1e-12, f"{name}: impact {r[0]} {f}: {r[k]} vs {want[f]}"
+        assert r[8] == bool(want["ended_in_sticking"]), (name, r[0])
+
+
+def run(domain, vendors, tmp_path, stall=False):
+    omega, v = CHATTER
+    readers = [Reader(kind, domain, str(tmp_path / f"reader{k}.json")) for k, kind in enumerate(vendors)]
+    node = NodeProcess("-p", "real_time_factor:=0.0", "-p", "publish_rate:=10.0", "-p", f"Omega:={omega}",
+                       "-p", f"V:={v}", "-p", f"history_depth:={DEPTH}",
+                       "-p", f"wait_for_impact_subscriptions:={len(vendors)}",
+                       "-p", "wait_for_impact_subscriptions_timeout:=60", domain=domain)
+    try:
+        opened = node.wait_for_line("starting the simulation", 65)
+        assert opened and "impact subscriptions matched after" in opened, opened or node.stop()
+        started = time.monotonic()
+        time.sleep(1.0)
+        for r in readers:
+            r.signal(signal.SIGUSR1)  # the late readers join
+        seconds = SECONDS
+        if stall:
+            time.sleep(0.5)  # its late reader exists
+            readers[-1].signal(signal.SIGSTOP)
+            time.sleep(STALL_SECONDS)
+            readers[-1].signal(signal.SIGCONT)
+            seconds = max(SECONDS, 1.5 + STALL_SECONDS + 1.0)
+        time.sleep(max(0.0, seconds - (time.monotonic() - started)))
+        node.interrupt()
+        stopped = time.monotonic()
+        node.proc.wait(timeout=30)
+    finally:
+        log = node.stop()
+        got = [r.collect() for r in readers]
+    s = summary(log)
+    n = s["published"]
+    report = {"vendors": vendors, "stall": stall, "published": n, "located": s["located"],
+              "impacts_per_wall_second": round(n / (stopped - started)),
+              "received": [{k: len(x["rows"]) for k, x in g.items()} for g in got],
+              "late_first": [g["late"]["rows"][0][0] if g.get("late", {}).get("rows") else None for g in got],
+              "late_joined_after": [g.get("late", {}).get("joined_after") for g in got]}
+    print("MATRIX " + json.dumps(report))
+    print("\n".join(line for line in log.splitlines() if "impacts: " in line or "starting the simulation" in line))
+    assert s["failed"] == 0 and n == s["located"], report
+    assert f"impacts: all {n} published acknowledged by the {2 * len(vendors)} matched subscriptions" in log, log[-3000:]
+    last_t = max(r[1] for g in got for x in g.values() for r in x["rows"])
+    ref = reference(omega, v, last_t + 1.0)
+    assert len(ref) >= n, (len(ref), n)
+    for k, g in enumerate(got):
+        name = f"{vendors[k]} process {k}"
+        check_rows(g["early"]["rows"], ref, 0, n - 1, f"{name} early")
+        late = g["late"]["rows"]
+        assert late, report
+        first = late[0][0]
+        # The last history_depth impacts published when it matched (more when a reader of the
+        # same process had not acknowledged older ones), then every one.
+        assert first == 0 or first + DEPTH <= n, report
+        check_rows(late, ref, first, n - 1, f"{name} late")
+    return report
+
+
+@pytest.mark.parametrize("repeat", range(REPEAT))
+@pytest.mark.parametrize("case", list(CASES))
+def test_every_impact_every_vendor(case, repeat, tmp_path):
+    domain = 70 + list(CASES).index(case)
+    report = run(domain, CASES[case], tmp_path, stall=case.endswith("stalled"))
+    report_file(f"matrix_{case}_{repeat}.json", report)
