@@ -1,7 +1,8 @@
 # ROS 2 node (included by the top-level Makefile): interop tests against real ROS 2 (rclpy on
 # rmw_fastrtps from the PyPI wheels, interface package built by rosidl) and Cyclone DDS, each
 # test file in its own network namespace (ros/netns.sh). The soak runs SOAK_SECONDS (60); the
-# fault tests (test_fault_*.py) run short here and long in stress-ros.
+# fault tests (test_fault_*.py) run short here and long in stress-ros, which also repeats the
+# interop matrix and the discovery of test_names.py.
 
 ROS_NODE_BIN := target/release/bistable_impact_node
 
@@ -33,8 +34,17 @@ FAULT_FLOOD_BASELINE ?= 10
 FAULT_FLOOD_REQUESTS ?= 1
 FAULT_FLOOD_REQUEST_RATE ?= 300
 
+# The interop matrix (every vendor, free-running, late joiners, SIGINT, a stalled reader) runs
+# MATRIX_REPEAT times per case; test_names.py (two nodes and a Fast DDS peer discovering each
+# other) NAMES_RUNS times, each run in a fresh network namespace.
+MATRIX_REPEAT ?= 20
+NAMES_RUNS ?= 50
+
 stress-ros: ros-setup ros-build
 	rm -rf $(ROS_STRESS_OUT) && mkdir -p $(ROS_STRESS_OUT)
+	FAULT_REPORT_DIR=$(abspath $(ROS_STRESS_OUT)) MATRIX_REPEAT=$(MATRIX_REPEAT) \
+	PYTEST_ADDOPTS="-s $${PYTEST_ADDOPTS:-}" bash ros/run-tests.sh tests/ros/test_interop_matrix.py
+	ROS_TEST_REPEAT=$(NAMES_RUNS) bash ros/run-tests.sh tests/ros/test_names.py
 	FAULT_REPORT_DIR=$(abspath $(ROS_STRESS_OUT)) FAULT_COMMAND_SECONDS=$(FAULT_COMMAND_SECONDS) \
 	FAULT_CHURN_SECONDS=$(FAULT_CHURN_SECONDS) FAULT_CHURN_KILL_EVERY=$(FAULT_CHURN_KILL_EVERY) \
 	FAULT_FLOOD_SECONDS=$(FAULT_FLOOD_SECONDS) FAULT_FLOOD_PUBLISHERS=$(FAULT_FLOOD_PUBLISHERS) \

@@ -42,12 +42,13 @@ fn main() -> ExitCode {
 fn print_help() {
     println!("{}", args::USAGE);
     let d = Settings::default();
+    let width = SPECS.iter().map(|s| s.name.len()).max().unwrap_or(0);
     for s in SPECS {
         let kind = match s.change {
             Change::Runtime => "runtime",
             Change::StartUp => "start-up",
         };
         let v = d.get(s.name).map(|v| format!("{v:?}")).unwrap_or_default();
-        println!("  {:<17} {} ({kind}; default {v})", s.name, s.doc);
+        println!("  {:<width$} {} ({kind}; default {v})", s.name, s.doc);
     }
 }
