@@ -1,21 +1,25 @@
 """A subscriber process of /bistable/impacts as a user's own node would be, for
 test_interop_matrix.py (run as its own process, started before or together with the node).
 
-    impact_reader.py VENDOR DOMAIN OUT
+    impact_reader.py VENDOR DOMAIN OUT [NAME]
 
 VENDOR is `cyclone` (Eclipse Cyclone DDS through its Python binding, DDS topic
 rt/bistable/impacts) or `fastdds` (rclpy on rmw_fastrtps). At once it creates one reliable,
-transient-local, keep-all impact reader (`early`) and prints `ready`. SIGUSR1 creates a second
-such reader in the same process (`late`, a reader joining mid-run next to the first: same
-participant for rclpy, same Cyclone DDS domain instance). SIGUSR2 prints the counts received so
-far as one JSON line. SIGTERM or SIGINT: takes what is left until nothing new comes for
-QUIET seconds, writes every reader's impacts to OUT as JSON ({name: {"joined_after": impacts
-the early reader held when it was created, "rows": [[index, t, phase, x, v_before, v_after,
-zdot, delta_k, ended_in_sticking], ...]}}) and exits 0. SIGSTOP/SIGCONT stall it as a whole.
+transient-local, keep-all impact reader (named NAME, default `early`) and prints `ready`. Then
+it takes commands, one a line, on its standard input (not signals: a signal can land on a DDS
+thread and break its receiving):
+    join   creates a second such reader in the same process (`late`, a reader joining mid-run
+           next to the first: same participant for rclpy, same Cyclone DDS domain instance);
+    count  prints the counts received so far as one JSON line;
+    stop   (or end of input) takes what is left until nothing new comes for QUIET seconds,
+           writes every reader's impacts to OUT as JSON ({name: {"joined_after": impacts the
+           first reader held when it was created, "rows": [[index, t, phase, x, v_before,
+           v_after, zdot, delta_k, ended_in_sticking], ...]}}) and exits 0.
+SIGSTOP/SIGCONT stall it as a whole.
 """
 import json
 import os
-import signal
+import select
 import sys
 import time
 
@@ -98,24 +102,23 @@ class FastDds:
         return self.got
 
 
-def main(vendor, domain, out):
+def main(vendor, domain, out, name="early"):
     peer = {"cyclone": Cyclone, "fastdds": FastDds}[vendor](int(domain))
-    readers = {"early": {"joined_after": 0, "rows": []}}
-    peer.subscribe(readers["early"]["rows"])
-    requests = []
-    for sig, what in [(signal.SIGUSR1, "join"), (signal.SIGUSR2, "count"), (signal.SIGTERM, "stop"),
-                      (signal.SIGINT, "stop")]:
-        signal.signal(sig, lambda *_, what=what: requests.append(what))
+    readers = {name: {"joined_after": 0, "rows": []}}
+    peer.subscribe(readers[name]["rows"])
     print("ready", flush=True)
-    while "stop" not in requests:
+    while True:
         peer.poll(0.005)
-        while requests and requests[0] != "stop":
-            what = requests.pop(0)
-            if what == "join" and "late" not in readers:
-                readers["late"] = {"joined_after": len(readers["early"]["rows"]), "rows": []}
-                peer.subscribe(readers["late"]["rows"])
-            elif what == "count":
-                print(json.dumps({k: len(r["rows"]) for k, r in readers.items()}), flush=True)
+        if not select.select([sys.stdin], [], [], 0)[0]:
+            continue
+        what = sys.stdin.readline().strip()
+        if what in ("stop", ""):
+            break
+        if what == "join" and "late" not in readers:
+            readers["late"] = {"joined_after": len(readers[name]["rows"]), "rows": []}
+            peer.subscribe(readers["late"]["rows"])
+        elif what == "count":
+            print(json.dumps({k: len(r["rows"]) for k, r in readers.items()}), flush=True)
     quiet_since = time.monotonic()
     while time.monotonic() - quiet_since < QUIET:
         if peer.poll(0.01):

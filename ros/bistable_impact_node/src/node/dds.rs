@@ -177,7 +177,7 @@ pub struct Dds {
     pub impact_pub: Publisher<ImpactEvent>,
     pub state_pub: Publisher<MassState>,
     pub log: Logger,
-    /// Matches of remote subscriptions (the impact subscriptions counted at shutdown).
+    /// The participant's status events (only emptied: the writers count their matches).
     pub status: DomainParticipantStatusListener,
     pub fully_qualified: String,
     /// Kept alive as long as the node.

@@ -1,7 +1,7 @@
 //! What the loop publishes (state, clock, impacts, step answers) and the shutdown's wait for
 //! the impact subscribers' acknowledgements.
 
-use std::collections::{BTreeSet, VecDeque};
+use std::collections::VecDeque;
 use std::time::{Duration, Instant};
 
 use bistable_impact_node::control::StepJob;
@@ -9,9 +9,7 @@ use bistable_impact_node::diagnostics::Counters;
 use bistable_impact_node::logging::{Log, LogLevel};
 use bistable_impact_node::msg::{Clock, ImpactEvent, MassState, StepResponse};
 use bistable_impact_node::sim::Runner;
-use ros2_client::dds::rustdds::{
-    DomainParticipantStatusEvent, DomainParticipantStatusListener, StatusEvented, GUID,
-};
+use ros2_client::dds::rustdds::{DomainParticipantStatusListener, StatusEvented};
 use ros2_client::service::RmwRequestId;
 use ros2_client::{Publisher, WriteError};
 
@@ -120,47 +118,15 @@ pub fn answer_step_done(sv: &Services, st: &State, job: StepJob<RmwRequestId>, l
     }
 }
 
-/// How often the loop reads the participant's status events (matched subscriptions).
+/// How often the loop empties the participant's status event channel.
 pub const STATUS_POLL: Duration = Duration::from_millis(100);
 
-/// The remote subscriptions matched to one local writer, from the participant's status
-/// events (the node runs no ros2-client spinner, which would keep this graph).
-pub struct MatchedReaders {
-    writer: GUID,
-    readers: BTreeSet<GUID>,
-}
-
-impl MatchedReaders {
-    pub fn new(writer: GUID) -> Self {
-        Self {
-            writer,
-            readers: BTreeSet::new(),
-        }
-    }
-
-    pub fn update(&mut self, status: &DomainParticipantStatusListener) {
-        while let Some(event) = status.try_recv_status() {
-            match event {
-                DomainParticipantStatusEvent::RemoteReaderMatched {
-                    local_writer,
-                    remote_reader,
-                } if local_writer == self.writer => {
-                    self.readers.insert(remote_reader);
-                }
-                DomainParticipantStatusEvent::ReaderLost { guid, .. } => {
-                    self.readers.remove(&guid);
-                }
-                DomainParticipantStatusEvent::ParticipantLost { id, .. } => {
-                    self.readers.retain(|g| g.prefix != id);
-                }
-                _ => {}
-            }
-        }
-    }
-
-    pub fn count(&self) -> usize {
-        self.readers.len()
-    }
+/// Empties the participant's status event channel (the node runs no ros2-client spinner to
+/// read it; a full channel makes RustDDS log an error for every further event). The node
+/// counts matched subscriptions from the writers themselves (`matched_reader_count`), which
+/// loses nothing when events are dropped.
+pub fn drain_status(status: &DomainParticipantStatusListener) {
+    while status.try_recv_status().is_some() {}
 }
 
 /// At shutdown DDS keeps running while the matched reliable impact subscribers acknowledge the

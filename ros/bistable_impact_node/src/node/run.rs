@@ -14,8 +14,8 @@ use ros2_client::dds::rustdds::mio1::{Poll, Waker};
 
 use super::dds::Dds;
 use super::publish::{
-    answer_step, answer_step_done, await_acknowledgements, flush_impacts, publish_impacts,
-    publish_tick, MatchedReaders, STATUS_POLL,
+    answer_step, answer_step_done, await_acknowledgements, drain_status, flush_impacts,
+    publish_impacts, publish_tick, STATUS_POLL,
 };
 use super::serve::{register_wakeups, Inbox, State, STOP_TOKEN};
 
@@ -48,7 +48,6 @@ pub fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
         dds: &dds,
         stop: &stop,
         inbox: Inbox::new(&dds.command_sub, &dds.services, poll),
-        impact_readers: MatchedReaders::new(dds.impact_pub.guid()),
         next_status_poll: Instant::now(),
         last_outcome: Outcome::Tick,
         fresh: Vec::new(),
@@ -71,8 +70,7 @@ struct Loop<'a> {
     dds: &'a Dds,
     stop: &'a AtomicBool,
     inbox: Inbox<'a>,
-    impact_readers: MatchedReaders,
-    /// When the participant's status events are read next.
+    /// When the participant's status events are emptied next.
     next_status_poll: Instant,
     /// What the last advance ended with (a change to blocked or halted is logged).
     last_outcome: Outcome,
@@ -101,7 +99,7 @@ impl Loop<'_> {
         // second, not at every step of a free-running loop (that starved discovery, so that
         // departed subscribers stayed matched and held up the reliable writers).
         if Instant::now() >= self.next_status_poll {
-            self.impact_readers.update(&d.status);
+            drain_status(&d.status);
             self.next_status_poll = Instant::now() + STATUS_POLL;
         }
         self.inbox.serve(st, &d.log, false);
@@ -239,10 +237,9 @@ impl Loop<'_> {
         // Reliable subscribers may still be missing some of the last impacts (up to the send
         // window of 8192 at a high impact rate): DDS keeps running until they have
         // acknowledged them all.
-        self.impact_readers.update(&d.status);
         await_acknowledgements(
             &d.impact_pub,
-            self.impact_readers.count(),
+            d.impact_pub.matched_reader_count(),
             n.impacts,
             &d.log,
         );
