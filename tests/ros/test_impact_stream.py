@@ -215,8 +215,11 @@ def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
         check_stream(r.got, ref, 0, n - 1, f"early {r.kind} {k}")
     assert late.got, report
     first = late.got[0].index
-    # The last DEPTH impacts published when it matched (at least `joined_after` were), then live.
-    assert first + DEPTH >= joined_after and (first == 0 or first + DEPTH <= n), report
+    # The last DEPTH impacts published when it matched (at least `joined_after` were), then live;
+    # a Cyclone DDS reader may get more, what its process's other reader had not acknowledged
+    # (ros/patches/README.md, GAPs for readers that share a receiver).
+    assert first == 0 or first + DEPTH <= n, report
+    assert late.kind == "cyclone" or first + DEPTH >= joined_after, report
     check_stream(late.got, ref, first, n - 1, f"late {late.kind}")
     return report, log
 
