@@ -8,8 +8,10 @@ import json
 import os
 import pathlib
 import re
+import select
 import signal
 import subprocess
+import sys
 import threading
 import time
 
@@ -96,6 +98,69 @@ class NodeProcess:
             self.log = "".join(self._head + ([f"[... {skipped} lines ...]\n"] if skipped else []) + tail)
             assert self.proc.returncode == 0, self.log
         return self.log
+
+
+class ReaderProcess:
+    """One impact_reader.py process: a subscriber of /bistable/impacts as a user's own node would
+    be (see that file)."""
+
+    def __init__(self, vendor, domain, out, name="early"):
+        self.vendor, self.out, self.ready = vendor, out, False
+        self.proc = subprocess.Popen([sys.executable, str(pathlib.Path(__file__).with_name("impact_reader.py")), vendor, str(domain), out,
+                                      name], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
+                                     preexec_fn=_die_with_parent)
+
+    def command(self, what):
+        """Sends a command line (impact_reader.py: join, count, stop)."""
+        self.proc.stdin.write(what + "\n")
+        self.proc.stdin.flush()
+
+    def _line(self, timeout):
+        """The next line it printed, or None after `timeout` seconds."""
+        if not select.select([self.proc.stdout], [], [], timeout)[0]:
+            return None
+        return self.proc.stdout.readline()
+
+    def counts(self, timeout=5.0):
+        """What its readers have received so far ({name: count}), asked once it has said
+        `ready`; {} while it has not."""
+        while not self.ready:
+            line = self._line(0)
+            if line is None:
+                return {}
+            self.ready = line.strip() == "ready"
+        self.command("count")
+        end = time.monotonic() + timeout
+        while (line := self._line(max(0.0, end - time.monotonic()))) is not None:
+            if line.startswith("{"):
+                return json.loads(line)
+        return {}
+
+    def join(self, domain, tmp_path, k, same_process=False):
+        """A second reader of the same vendor: in a new process (returned), or with
+        `same_process` in this one (None returned)."""
+        if same_process:
+            self.command("join")
+            return None
+        return ReaderProcess(self.vendor, domain, str(tmp_path / f"late{k}.json"), "late")
+
+    def signal(self, sig):
+        self.proc.send_signal(sig)
+
+    def collect(self):
+        """Stops it and returns {reader name: {"joined_after", "rows"}}."""
+        try:
+            self.command("stop")
+        except BrokenPipeError:  # it has exited: its status tells
+            pass
+        try:
+            self.proc.wait(timeout=60)
+        finally:
+            if self.proc.poll() is None:
+                self.proc.kill()
+        assert self.proc.returncode == 0, (self.vendor, self.proc.returncode)
+        with open(self.out) as f:
+            return json.load(f)
 
 
 SUMMARY = re.compile(r"stopping at t = (?P<t>\S+) s: (?P<located>\d+) impacts located, (?P<published>\d+) published "

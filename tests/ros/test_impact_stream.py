@@ -5,8 +5,8 @@ speed; the simulation waits for it instead.
 Each run: keep-all, reliable, transient-local subscribers (rclpy on Fast DDS, or Eclipse Cyclone
 DDS through its Python binding) exist before the node starts; the node starts frozen
 (real_time_factor 1e-9) until they have impact 0, then free-runs for FREE_RUN wall seconds; a
-second transient-local subscriber of the same kind joins mid-run, in a participant of its own (a
-subscriber process started later). The run ends by a freeze
+second transient-local subscriber of the same kind joins mid-run, in a participant of its own (for
+Cyclone DDS a subscriber process started later, impact_reader.py). The run ends by a freeze
 (real_time_factor 1e-9 again, the node alive) or by SIGINT while impacts stream; the subscribers
 drain. Then the early subscribers hold exactly the indices 0..N-1 (N from the node's summary),
 equal to the core simulator's impacts to 1e-12, and the mid-run one the last history_depth
@@ -21,11 +21,14 @@ import os
 import random
 import subprocess
 import sys
+import tempfile
 import time
+from types import SimpleNamespace
 
 import pytest
 from bistable_impact_msgs.msg import ImpactEvent
-from common import IMPACT_FIELDS, NodeProcess, Spinner, _die_with_parent, keep_all_impacts, reference, summary
+from common import (IMPACT_FIELDS, NodeProcess, ReaderProcess, Spinner, _die_with_parent, keep_all_impacts,
+                    reference, summary)
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 
@@ -79,6 +82,29 @@ class CycloneImpacts:
         self.got += [s for s in self.reader.take(N=1000) if isinstance(s, CycloneImpact)]
 
 
+class ProcessImpacts:
+    """A Cyclone DDS subscriber in a process of its own (impact_reader.py), for the late joiner: a
+    Cyclone DDS reader created mid-stream next to another impact reader of its process can lose
+    impacts (ros/README.md, Every impact to every reliable subscriber). Its impacts are in `got`
+    after `collect`."""
+
+    kind = "cyclone"
+
+    def __init__(self, domain):
+        self.out = tempfile.NamedTemporaryFile(suffix=".json", delete=False).name
+        self.proc = ReaderProcess("cyclone", domain, self.out, "late")
+        self.got = []
+
+    def poll(self):
+        pass
+
+    def collect(self):
+        rows = self.proc.collect()["late"]["rows"]
+        os.unlink(self.out)
+        fields = ["index", *IMPACT_FIELDS, "ended_in_sticking"]
+        self.got = [SimpleNamespace(**dict(zip(fields, r))) for r in rows]
+
+
 class Peers:
     """The rclpy peer (parameters, rclpy subscriptions) and a Cyclone DDS participant."""
 
@@ -92,16 +118,16 @@ class Peers:
 
     def subscribe(self, kind, own_participant=False):
         """A subscription in the peer's participant, or (`own_participant`) in a new one, as a
-        subscriber process that starts later would be (Cyclone DDS hands a transient-local
-        reader samples its participant got for another reader before the node's writer has
-        matched it, see ros/patches/README.md)."""
-        if kind == "rclpy":
+        subscriber process that starts later would be: for Cyclone DDS a process of its own
+        (a new participant in this process would share its receiving with the first reader)."""
+        if kind == "cyclone" and own_participant:
+            r = ProcessImpacts(self.domain)
+        elif kind == "rclpy":
             if own_participant:
                 self.late_spinner = Spinner(self.domain, "stream_late_peer")
             r = RclpyImpacts(self.late_spinner if own_participant else self.spinner)
         else:
-            dp = DomainParticipant(self.domain) if own_participant else self.dp
-            r = CycloneImpacts(dp, Topic(dp, "rt/bistable/impacts", CycloneImpact) if own_participant else self.topic)
+            r = CycloneImpacts(self.dp, self.topic)
         self.readers.append(r)
         return r
 
@@ -172,6 +198,7 @@ def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
     node = NodeProcess("-p", "real_time_factor:=1e-9", "-p", "publish_rate:=10.0", "-p", f"Omega:={omega}",
                        "-p", f"V:={v}", "-p", f"history_depth:={DEPTH}", domain=domain)
     busy = []
+    late = None
     try:
         assert peers.spin_until(lambda: all(r.got for r in early), 30), "early subscribers not matched"
         assert params.wait_for_services(timeout_sec=20)
@@ -191,6 +218,8 @@ def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
             peers.spin_until(lambda: not node.alive(), 30)
         peers.drain()
     finally:
+        if isinstance(late, ProcessImpacts):
+            late.collect()
         for p in busy:
             p.kill()
         log = node.stop()

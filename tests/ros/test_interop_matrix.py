@@ -5,9 +5,9 @@ simulation at t = 0 until they are matched (`wait_for_impact_subscriptions`, the
 start a lossless free-running run), and nothing in the test freezes or paces it.
 
 Each subscriber process (impact_reader.py) has a reliable, transient-local, keep-all reader from
-its start. About a second into the stream a second such reader joins for each: in the same
-process for Fast DDS, in a process of its own for Cyclone DDS (a Cyclone DDS reader created next
-to another reader of the same process while the node streams can lose impacts, a limit measured
+its start. About a second into the stream a second such reader joins for each, in a process of
+its own (a reader created next to another reader of the same process while the node streams
+can lose impacts with Cyclone DDS and stalled its neighbour once with Fast DDS, limits measured
 in docs/reliability.md; MATRIX_SAME_PROCESS=1 creates them so, to measure it). The run ends by
 SIGINT while impacts stream; the node must publish every impact it located and wait for every
 acknowledgement; then the processes drain and write what they got. Checks: the node's summary
@@ -23,22 +23,19 @@ stress-ros: 20); MATRIX_SECONDS (3) of streaming; MATRIX_MIN_RATE (4000) impacts
 at least without a stalled reader. Figures printed as MATRIX {...} lines."""
 import json
 import os
-import select
 import signal
-import subprocess
-import sys
 import time
 
 import pytest
-from common import IMPACT_FIELDS, NodeProcess, _die_with_parent, reference, report_file, summary
+from common import IMPACT_FIELDS, NodeProcess, ReaderProcess, reference, report_file, summary
 
-HERE = os.path.dirname(os.path.abspath(__file__))
 SECONDS = float(os.environ.get("MATRIX_SECONDS", "3"))
 REPEAT = int(os.environ.get("MATRIX_REPEAT", "1"))
 STALL_SECONDS = 2.0
 # Lowest rate [impacts per wall second] of a run without a stalled reader (here: 6,400-7,100
 # with rclpy readers, 22,000-31,000 with Cyclone DDS readers only).
 MIN_RATE = float(os.environ.get("MATRIX_MIN_RATE", "4000"))
+SAME_PROCESS = bool(os.environ.get("MATRIX_SAME_PROCESS"))
 DEPTH = 1000
 CHATTER = (0.2, 0.05)
 CASES = {
@@ -47,68 +44,6 @@ CASES = {
     "mixed": ["cyclone", "fastdds"],
     "mixed_stalled": ["cyclone", "cyclone", "fastdds"],
 }
-
-
-class Reader:
-    """One impact_reader.py process."""
-
-    def __init__(self, vendor, domain, out, name="early"):
-        self.vendor, self.out, self.ready = vendor, out, False
-        self.proc = subprocess.Popen([sys.executable, os.path.join(HERE, "impact_reader.py"), vendor, str(domain), out,
-                                      name], stdin=subprocess.PIPE, stdout=subprocess.PIPE, text=True,
-                                     preexec_fn=_die_with_parent)
-
-    def command(self, what):
-        """Sends a command line (impact_reader.py: join, count, stop)."""
-        self.proc.stdin.write(what + "\n")
-        self.proc.stdin.flush()
-
-    def _line(self, timeout):
-        """The next line it printed, or None after `timeout` seconds."""
-        if not select.select([self.proc.stdout], [], [], timeout)[0]:
-            return None
-        return self.proc.stdout.readline()
-
-    def counts(self, timeout=5.0):
-        """What its readers have received so far ({name: count}), asked once it has said
-        `ready`; {} while it has not."""
-        while not self.ready:
-            line = self._line(0)
-            if line is None:
-                return {}
-            self.ready = line.strip() == "ready"
-        self.command("count")
-        end = time.monotonic() + timeout
-        while (line := self._line(max(0.0, end - time.monotonic()))) is not None:
-            if line.startswith("{"):
-                return json.loads(line)
-        return {}
-
-    def join(self, domain, tmp_path, k):
-        """A second reader: in this process for Fast DDS, in a new process for Cyclone DDS (then
-        returned)."""
-        if self.vendor == "fastdds" or os.environ.get("MATRIX_SAME_PROCESS"):
-            self.command("join")
-            return None
-        return Reader(self.vendor, domain, str(tmp_path / f"late{k}.json"), "late")
-
-    def signal(self, sig):
-        self.proc.send_signal(sig)
-
-    def collect(self):
-        """Stops it and returns {reader name: {"joined_after", "rows"}}."""
-        try:
-            self.command("stop")
-        except BrokenPipeError:  # it has exited: its status tells
-            pass
-        try:
-            self.proc.wait(timeout=60)
-        finally:
-            if self.proc.poll() is None:
-                self.proc.kill()
-        assert self.proc.returncode == 0, (self.vendor, self.proc.returncode)
-        with open(self.out) as f:
-            return json.load(f)
 
 
 def check_rows(rows, ref, first, last, name):
@@ -126,7 +61,7 @@ def check_rows(rows, ref, first, last, name):
 
 def run(domain, vendors, tmp_path, stall=False):
     omega, v = CHATTER
-    readers = [Reader(kind, domain, str(tmp_path / f"reader{k}.json")) for k, kind in enumerate(vendors)]
+    readers = [ReaderProcess(kind, domain, str(tmp_path / f"reader{k}.json")) for k, kind in enumerate(vendors)]
     node = NodeProcess("-p", "real_time_factor:=0.0", "-p", "publish_rate:=10.0", "-p", f"Omega:={omega}",
                        "-p", f"V:={v}", "-p", f"history_depth:={DEPTH}",
                        "-p", f"wait_for_impact_subscriptions:={len(vendors)}",
@@ -137,11 +72,12 @@ def run(domain, vendors, tmp_path, stall=False):
         assert opened and "impact subscriptions matched after" in opened, opened or node.stop()
         started = time.monotonic()
         time.sleep(1.0)
-        joiners += [r.join(domain, tmp_path, k) for k, r in enumerate(readers[:-1] if stall else readers)]
+        first_ones = readers[:-1] if stall else readers
+        joiners += [r.join(domain, tmp_path, k, SAME_PROCESS) for k, r in enumerate(first_ones)]
         seconds = SECONDS
         if stall:
             # The last process (Fast DDS) stalls; the node waits for it (its send window fills).
-            # Its late reader joins as it resumes, while its early one is catching up on repairs.
+            # Its late reader joins as it resumes, while its early one catches up on repairs.
             readers[-1].signal(signal.SIGSTOP)
             time.sleep(STALL_SECONDS)
             readers[-1].signal(signal.SIGCONT)
