@@ -199,24 +199,18 @@ mod tests {
         let d = describe("omega0");
         assert!(d.read_only && d.description.contains("rad/s"));
         assert!(!describe("zeta").read_only);
-        let h = describe("history_depth");
-        assert_eq!(
+        for (name, from, to) in [
+            ("history_depth", 1, MAX_HISTORY_DEPTH),
             (
-                h.read_only,
-                h.integer_range[0].from_value,
-                h.integer_range[0].to_value
+                "wait_for_impact_subscriptions",
+                0,
+                MAX_WAIT_FOR_SUBSCRIPTIONS,
             ),
-            (true, 1, MAX_HISTORY_DEPTH)
-        );
-        let w = describe("wait_for_impact_subscriptions");
-        assert_eq!(
-            (
-                w.read_only,
-                w.integer_range[0].from_value,
-                w.integer_range[0].to_value
-            ),
-            (true, 0, MAX_WAIT_FOR_SUBSCRIPTIONS)
-        );
+        ] {
+            let d = describe(name);
+            let r = &d.integer_range[0];
+            assert_eq!((d.read_only, r.from_value, r.to_value), (true, from, to));
+        }
         let t = describe("wait_for_impact_subscriptions_timeout");
         assert!(t.read_only && t.description.contains("wall time"));
         assert_eq!(t.floating_point_range[0].from_value, 0.0);
