@@ -132,7 +132,10 @@ def test_integer_arguments_out_of_range_raise_value_error(template, name, value)
 def test_orbit_with_a_multiplier_of_zero_has_no_floquet_exponent_and_finishes_in_time():
     got, msg, took = _outcome("bi.orbit(0.001, 0.07)['floquet_exponent']")
     assert (got, msg) == ("returned", "None"), msg
-    assert took < 2.0, took
+    # Its default settle of 2000 shaker periods is 1.3e7 time units at this Omega: 1.9-2.5 s of
+    # CPU on the Intel Xeon machines of 2026-11-29 (under 2 s on the AMD EPYC before), so the
+    # common 2 s bound of this file failed by machine speed alone; the bound is for a runaway.
+    assert took < 5.0, took
 
 
 def _crafted_checkpoint(now):
