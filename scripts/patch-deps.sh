@@ -42,7 +42,7 @@ patch_crate() { # name version sha256 patch-file...
 # payload, not a slice of the whole receive buffer; a writer tells how many readers are matched
 # and how many of its samples are not acknowledged yet; a GAP for a new reader spares what the
 # other readers of its receiving process still miss (Cyclone DDS applies it to all of them); a
-# discovery writer sends a new remote reader its samples in order, live only once it is in sync.
+# discovery writer sends a new Fast DDS reader its samples in order, live only once it is in sync.
 patch_crate rustdds 0.15.1 42683a88b9dc025d7d45771b88d20846443b4901ec4b045ca78b8dd316ab616f \
   ros/patches/rustdds-0.15.1-irrelevant-undecodable-data.patch \
   ros/patches/rustdds-0.15.1-transient-local-history.patch \
