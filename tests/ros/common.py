@@ -14,12 +14,15 @@ import subprocess
 import sys
 import threading
 import time
+from types import SimpleNamespace
 
 ROOT = pathlib.Path(__file__).resolve().parents[2]
 NODE = os.environ.get("BISTABLE_NODE", str(ROOT / "target/release/bistable_impact_node"))
 REFERENCE = os.environ.get("BISTABLE_REFERENCE", str(ROOT / "target/release/examples/reference_impacts"))
 PARAMS_FILE = ROOT / "ros/bistable_impact_node/config/bistable_impact.yaml"
 IMPACT_FIELDS = ["t", "phase", "x", "v_before", "v_after", "zdot", "delta_k"]
+# The columns of an impact row as impact_reader.py writes them.
+READER_FIELDS = ["index", *IMPACT_FIELDS, "ended_in_sticking"]
 
 
 _prctl = ctypes.CDLL(None, use_errno=True).prctl
@@ -192,6 +195,25 @@ def reference(omega, v, t_end, switch=None, state=None):
     args = [REFERENCE, str(omega), str(v), str(t_end)] + [repr(float(a)) for a in extra]
     out = subprocess.run(args, check=True, capture_output=True, text=True).stdout
     return [{k: float(v) for k, v in row.items()} for row in csv.DictReader(io.StringIO(out))]
+
+
+def impacts_of(rows):
+    """impact_reader.py's rows as impacts with the message's field names."""
+    return [SimpleNamespace(**dict(zip(READER_FIELDS, r))) for r in rows]
+
+
+def check_stream(got, ref, first, last, name):
+    """`got` holds the impacts first..last, each once, in order, equal to the reference."""
+    indices = [m.index for m in got]
+    assert indices == list(range(first, last + 1)), (
+        f"{name}: {len(indices)} received, expected {first}..{last}; missing "
+        f"{sorted(set(range(first, last + 1)) - set(indices))[:10]}, duplicated "
+        f"{len(indices) - len(set(indices))}")
+    for m in got:
+        r = ref[m.index]
+        for f in IMPACT_FIELDS:
+            assert abs(getattr(m, f) - r[f]) <= 1e-12, f"{name}: impact {m.index} {f}: {getattr(m, f)} vs {r[f]}"
+        assert m.ended_in_sticking == bool(r["ended_in_sticking"]), (name, m.index)
 
 
 def assert_impacts_match(received, ref, tol=1e-12):

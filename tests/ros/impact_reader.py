@@ -23,12 +23,13 @@ import select
 import sys
 import time
 
-FIELDS = ["index", "t", "phase", "x", "v_before", "v_after", "zdot", "delta_k", "ended_in_sticking"]
+from common import READER_FIELDS
+
 QUIET = 0.5
 
 
 def row(m):
-    return [getattr(m, f) for f in FIELDS]
+    return [getattr(m, f) for f in READER_FIELDS]
 
 
 class Cyclone:

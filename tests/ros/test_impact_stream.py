@@ -23,12 +23,11 @@ import subprocess
 import sys
 import tempfile
 import time
-from types import SimpleNamespace
 
 import pytest
 from bistable_impact_msgs.msg import ImpactEvent
-from common import (IMPACT_FIELDS, NodeProcess, ReaderProcess, Spinner, _die_with_parent, keep_all_impacts,
-                    reference, summary)
+from common import (NodeProcess, ReaderProcess, Spinner, _die_with_parent, check_stream, impacts_of,
+                    keep_all_impacts, reference, summary)
 from rclpy.parameter import Parameter
 from rclpy.parameter_client import AsyncParameterClient
 
@@ -101,8 +100,7 @@ class ProcessImpacts:
     def collect(self):
         rows = self.proc.collect()["late"]["rows"]
         os.unlink(self.out)
-        fields = ["index", *IMPACT_FIELDS, "ended_in_sticking"]
-        self.got = [SimpleNamespace(**dict(zip(fields, r))) for r in rows]
+        self.got = impacts_of(rows)
 
 
 class Peers:
@@ -165,20 +163,6 @@ def hogs(n):
     """`n` processes that keep a core busy each (killed with the test process too)."""
     return [subprocess.Popen([sys.executable, "-c", "while True: pass"], preexec_fn=_die_with_parent)
             for _ in range(n)]
-
-
-def check_stream(got, ref, first, last, name):
-    """`got` holds the impacts first..last, each once, in order, equal to the reference."""
-    indices = [m.index for m in got]
-    assert indices == list(range(first, last + 1)), (
-        f"{name}: {len(indices)} received, expected {first}..{last}; missing "
-        f"{sorted(set(range(first, last + 1)) - set(indices))[:10]}, duplicated "
-        f"{len(indices) - len(set(indices))}")
-    for m in got:
-        r = ref[m.index]
-        for f in IMPACT_FIELDS:
-            assert abs(getattr(m, f) - r[f]) <= 1e-12, f"{name}: impact {m.index} {f}: {getattr(m, f)} vs {r[f]}"
-        assert m.ended_in_sticking == bool(r["ended_in_sticking"]), (name, m.index)
 
 
 def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
