@@ -5,10 +5,10 @@ simulation at t = 0 until they are matched (`wait_for_impact_subscriptions`, the
 start a lossless free-running run), and nothing in the test freezes or paces it.
 
 Each subscriber process (impact_reader.py) has a reliable, transient-local, keep-all reader from
-its start. About a second into the stream a second such reader joins for each, in a process of
-its own (a reader created next to another reader of the same process while the node streams
-can lose impacts with Cyclone DDS and stalled its neighbour once with Fast DDS, limits measured
-in docs/reliability.md; MATRIX_SAME_PROCESS=1 creates them so, to measure it). The run ends by
+its start. About a second into the stream a second such reader joins for each: for the first
+process of a run in that same process (next to a reader that is streaming: Cyclone DDS buffers
+for the newcomer what its process receives before the node has matched it), for the others in a
+process of its own (MATRIX_JOIN=same or own puts every one there). The run ends by
 SIGINT while impacts stream; the node must publish every impact it located and wait for every
 acknowledgement; then the processes drain and write what they got. Checks: the node's summary
 (located = published, none failed, all acknowledged by every matched subscription), every
@@ -35,7 +35,13 @@ STALL_SECONDS = 2.0
 # Lowest rate [impacts per wall second] of a run without a stalled reader (here: 6,400-7,100
 # with rclpy readers, 22,000-31,000 with Cyclone DDS readers only).
 MIN_RATE = float(os.environ.get("MATRIX_MIN_RATE", "4000"))
-SAME_PROCESS = bool(os.environ.get("MATRIX_SAME_PROCESS"))
+JOIN = os.environ.get("MATRIX_JOIN", "alternate")
+assert JOIN in ("alternate", "same", "own"), f"MATRIX_JOIN={JOIN}: alternate, same or own"
+
+
+def same_process(k):
+    """Whether the late reader for the k-th reader process joins in that process."""
+    return JOIN == "same" or (JOIN == "alternate" and k == 0)
 DEPTH = 1000
 CHATTER = (0.2, 0.05)
 CASES = {
@@ -60,7 +66,7 @@ def run(domain, vendors, tmp_path, stall=False):
         started = time.monotonic()
         time.sleep(1.0)
         first_ones = readers[:-1] if stall else readers
-        joiners += [r.join(domain, tmp_path, k, SAME_PROCESS) for k, r in enumerate(first_ones)]
+        joiners += [r.join(domain, tmp_path, k, same_process(k)) for k, r in enumerate(first_ones)]
         seconds = SECONDS
         if stall:
             # The last process (Fast DDS) stalls; the node waits for it (its send window fills).
@@ -68,7 +74,7 @@ def run(domain, vendors, tmp_path, stall=False):
             readers[-1].signal(signal.SIGSTOP)
             time.sleep(STALL_SECONDS)
             readers[-1].signal(signal.SIGCONT)
-            joiners.append(readers[-1].join(domain, tmp_path, len(readers) - 1))
+            joiners.append(readers[-1].join(domain, tmp_path, len(readers) - 1, JOIN == "same"))
             seconds = max(SECONDS, 1.0 + STALL_SECONDS + 1.5)
         time.sleep(max(0.0, seconds - (time.monotonic() - started)))
         # A reader in a new process is matched by the node after its participant is discovered
