@@ -6,7 +6,7 @@
 
 ROS_NODE_BIN := target/release/bistable_impact_node
 
-.PHONY: test-ros stress-ros ros-setup ros-build
+.PHONY: test-ros test-ros-patches stress-ros ros-setup ros-build
 
 ## ROS 2 venv (ros/.venv) and the rosidl build of bistable_impact_msgs; skipped when up to date.
 ros-setup: setup
@@ -16,7 +16,11 @@ ros-setup: setup
 ros-build:
 	$(CARGO) build --release -p bistable_impact_node --bin bistable_impact_node --example reference_impacts
 
-test-ros: ros-setup ros-build
+## The unit tests our RustDDS patches add to its writer (GAPs, history, discovery data).
+test-ros-patches: setup
+	$(CARGO) test --manifest-path .deps/rustdds/Cargo.toml --release --lib --quiet rtps::writer::tests::repair
+
+test-ros: ros-setup ros-build test-ros-patches
 	bash ros/run-tests.sh
 
 TEST_TARGETS += test-ros
