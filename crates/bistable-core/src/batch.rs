@@ -23,6 +23,7 @@ use crate::lanes::{F64x4, F64x8, Lane, Width};
 use crate::params::{Params, SolverOptions};
 use crate::potential::BARRIER;
 use crate::roots::certified_clear;
+use crate::simd;
 use crate::simulator::{LaneEnd, LaneStart, Observer, Progress, SimError, Simulator};
 use crate::taylor::{self, FlightSeries, VariationSeries, BUF, MAX_STEP};
 use crate::time::Instant;
@@ -490,15 +491,16 @@ impl Kernel {
     }
 }
 
-/// `$name` runs the kernel over `$lanes` in registers of `$feature` where the CPU has it (the
-/// kernel is compiled a second time, in `$fast`, for that feature), portably otherwise; the
-/// results are the same.
+/// `$name` runs the kernel over `$lanes` in registers of `$feature` where the SIMD path in use
+/// allows it (`$allowed`: the CPU has it and `BISTABLE_SIMD` does not rule it out, see
+/// [`crate::simd`]; the kernel is compiled a second time, in `$fast`, for that feature),
+/// portably otherwise; the results are the same.
 macro_rules! dispatch {
-    ($name:ident, $fast:ident, $lanes:ty, $feature:tt) => {
+    ($name:ident, $fast:ident, $lanes:ty, $feature:tt, $allowed:path) => {
         fn $name(s: &mut Soa<$lanes>, c: &Consts, starts: &[(usize, LaneStart)]) {
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!($feature) {
-                // SAFETY: the CPU has the feature, checked just above.
+            if $allowed() {
+                // SAFETY: the CPU has the feature (the path allows only features it has).
                 return unsafe { $fast(s, c, starts) };
             }
             s.run(c, starts)
@@ -512,8 +514,8 @@ macro_rules! dispatch {
     };
 }
 
-dispatch!(run8, run8_avx512, F64x8, "avx512f");
-dispatch!(run4, run4_avx2, F64x4, "avx2");
+dispatch!(run8, run8_avx512, F64x8, "avx512f", simd::avx512f);
+dispatch!(run4, run4_avx2, F64x4, "avx2", simd::avx2);
 
 /// The lanes' starts, side by side ([`LaneStart`]).
 struct Inputs<T> {

@@ -678,8 +678,8 @@ impl Simulator {
     /// evaluation, see [`crate::lanes`]). For the other instants ask `mass_at`.
     pub fn flights_at(&self, taus: &[f64; FLIGHT_LANES], out: &mut Flights) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has the feature, checked just above.
+        if crate::simd::avx512f() {
+            // SAFETY: the CPU has the feature (the SIMD path allows only features it has).
             return unsafe { self.flights_at_avx512(taus, out) };
         }
         self.flights_in_lanes(taus, out)
