@@ -7,12 +7,12 @@ BISTABLE := target/release/bistable
 DEMO_MAP = $(BISTABLE) map --omega-range 0.2:3.5:60 --velocity-range 0.005:0.2:40 \
 	--out $(OUT)/map.csv --plot $(OUT)/map.png --json > $(OUT)/map_summary.json
 
-.PHONY: all setup build test test-rust lint demo bench bench-ensemble stress stress-core clean
+.PHONY: all setup build test test-rust test-simd lint demo bench bench-ensemble stress stress-core clean
 
 all: build
 
 # Component makefiles (FMU, ROS 2 node, analyses) add their own test and demo steps to these.
-TEST_TARGETS := test-rust
+TEST_TARGETS := test-rust test-simd
 DEMO_TARGETS :=
 STRESS_TARGETS := stress-core
 -include fmu/fmu.mk
@@ -35,8 +35,29 @@ test: lint
 	$(MAKE) --no-print-directory $(TEST_TARGETS)
 	@echo "make test: all suites passed"
 
+# The CLI's 30 x 20 map for every lane width runs in test-simd, on each SIMD path.
+SIMD_MAP_TEST := map_is_the_same_for_every_lane_width
+
 test-rust: setup
-	$(CARGO) test --workspace
+	$(CARGO) test --workspace -- --skip $(SIMD_MAP_TEST)
+
+## The SIMD paths (BISTABLE_SIMD, crates/bistable-core/src/simd.rs): the lanes' bit-identity
+## tests (lanes against lone simulators, flights_at against mass_at) on the detected path, on
+## the portable one and, on a CPU with AVX-512, on AVX2; the 30 x 20 map for every lane width
+## on the detected and the portable path. Each run is headed by its path in the log, and the
+## simd test prints the path in use.
+test-simd: setup
+	@paths="auto portable"; grep -qw avx512f /proc/cpuinfo 2>/dev/null && paths="$$paths avx2"; \
+	for path in $$paths; do \
+		echo "test-simd: SIMD path BISTABLE_SIMD=$$path: lanes against lone simulators"; \
+		BISTABLE_SIMD=$$path $(CARGO) test --workspace --test simd --test batch --test mass_at \
+			-- --nocapture || exit 1; \
+	done; \
+	for path in auto portable; do \
+		echo "test-simd: SIMD path BISTABLE_SIMD=$$path: the 30 x 20 map for every lane width"; \
+		BISTABLE_SIMD=$$path $(CARGO) test --workspace --test simd --test lanes \
+			-- --nocapture --exact simd_path_is_the_one_asked_for $(SIMD_MAP_TEST) || exit 1; \
+	done
 
 ## Builds everything and runs the paper's baseline case, writing plots and a summary under out/.
 demo: build $(DEMO_TARGETS)

@@ -1313,8 +1313,7 @@ impl Observer for Probe {
 /// event before that time (a state where the core stopped with a Discard may fail that step
 /// again). An event at the saved time itself, reached without a step, is one still pending at
 /// that instant: a state saved at an early return between two events of one instant (an impact
-/// with `e = 0` and the plastic start of sticking it causes, found by the FMI 3.0 fuzz mode, seed
-/// 261) is the FMU's own. A state whose time lies beyond its step (e.g. a step start moved far
+/// with `e = 0` and the plastic start of sticking it causes) is the FMU's own. A state whose time lies beyond its step (e.g. a step start moved far
 /// back) would otherwise report an extrapolated state or integrate across the gap.
 fn check_inside_step(sim: &Simulator, omega: f64) -> Result<(), String> {
     let cp = sim.checkpoint();

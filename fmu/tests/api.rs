@@ -685,7 +685,7 @@ fn input_derivatives_set_during_initialization_shape_the_first_step() {
 
 #[test]
 fn a_step_beyond_the_clock_range_is_refused_at_once() {
-    // Found by the C host's fuzz mode: fmi2DoStep(tc, 1e20) integrated forever.
+    // A step far beyond the clock range (fmi2DoStep(tc, 1e20)) would integrate forever.
     let mut f = Fmu::started(&[]);
     assert_eq!(f.step(0.5), fmi2OK);
     let t0 = std::time::Instant::now();
@@ -719,9 +719,9 @@ fn state_bytes(f: &Fmu) -> Vec<u8> {
 
 #[test]
 fn well_formed_states_with_inconsistent_times_are_refused() {
-    // Found by the C host's fuzz mode with buffers whose checksum was recomputed after one field
-    // was changed: a model time of -1.8e308 s was accepted (every step then refused) and one of
-    // 3.1e8 s made the next small step integrate from the simulator's 43 s to 3.1e8 s (a hang).
+    // Well-formed buffers (checksum valid) with one field changed: a model time of -1.8e308 s
+    // accepted would have every step refused, and one of 3.1e8 s would make the next small step
+    // integrate from the simulator's 43 s to 3.1e8 s (a hang).
     use bistable_impact::state::Snapshot;
     let mut f = Fmu::started(&[]);
     f.run(43.0, 0.5);
@@ -774,8 +774,9 @@ fn well_formed_states_with_inconsistent_times_are_refused() {
 #[test]
 fn a_refused_external_step_leaves_the_outputs_as_they_were() {
     // A step refused because the input polynomial is not finite (derivative 1e300 m/s^5 with
-    // omega0 = 1e-3 rad/s) after a change of the tunable Omega used to move the phase reference
-    // first: last_impact_phase changed although fmi2DoStep returned fmi2Error.
+    // omega0 = 1e-3 rad/s) after a change of the tunable Omega must leave the phase reference
+    // too: moving it before the refusal would change last_impact_phase although fmi2DoStep
+    // returned fmi2Error.
     let params = [
         (var::shaker_mode, 2.0),
         (var::omega0, 1e-3),
@@ -818,14 +819,14 @@ fn cp(s: &mut bistable_impact::state::Snapshot) -> &mut bistable_core::Checkpoin
 
 #[test]
 fn well_formed_states_with_inconsistent_simulators_are_refused() {
-    // Found by the C host's fuzz mode (buffers with one field changed and the checksum
-    // recomputed), each accepted before: the restored instance then reported the mass 0.06 m
-    // below the plate (gap u0 = 2e-321 while approaching it), an infinite potential energy (plate
-    // coefficient 7e140), a last impact phase of -1.6e30 (phase origin -7.6e46) or -1.2e210
-    // (phase reference Omega 3.2e227), the mass below the plate after one step (plate Omega
-    // 1.4e82), a last impact 7900 s in the future, an impact count without an impact, outputs of
-    // another parameter set (initialization mode with a running model), or it integrated from a
-    // step start of -2.6e184 (a hang).
+    // Well-formed buffers (checksum valid) with one field changed, each of which a restored
+    // instance would turn into a state no run reaches: the mass 0.06 m below the plate (gap
+    // u0 = 2e-321 while approaching it), an infinite potential energy (plate coefficient
+    // 7e140), a last impact phase of -1.6e30 (phase origin -7.6e46) or -1.2e210 (phase
+    // reference Omega 3.2e227), the mass below the plate after one step (plate Omega 1.4e82), a
+    // last impact 7900 s in the future, an impact count without an impact, outputs of another
+    // parameter set (initialization mode with a running model), or an integration from a step
+    // start of -2.6e184 (a hang).
     use bistable_core::PlateRecord;
     use bistable_impact::state::Snapshot;
     let mut f = Fmu::started(&[(var::Omega, 0.3), (var::V, 0.05)]);
@@ -920,9 +921,9 @@ fn well_formed_states_with_inconsistent_simulators_are_refused() {
     for (needle, s) in &cases {
         assert_state_refused(&g, s, needle);
     }
-    // Found by the deserialize_state fuzz target (cargo-fuzz, debug assertions on): a step
-    // counter of u64::MAX overflowed in the core's next step (a panic with overflow checks, a
-    // silent wrap without); also the other counters and the solver settings.
+    // Counters at their maximum would overflow in the core's next step (a panic with overflow
+    // checks, a silent wrap without): a step counter of u64::MAX, the other counters, and
+    // solver settings no instance uses.
     let counters: [&dyn Fn(&mut Snapshot); 6] = [
         &|s| cp(s).stats.steps = u64::MAX,
         &|s| cp(s).stats.impacts = u64::MAX,
@@ -934,9 +935,9 @@ fn well_formed_states_with_inconsistent_simulators_are_refused() {
     for change in counters {
         assert_state_refused(&g, &edit(change), "FMU state");
     }
-    // Found by the deserialize_state fuzz target as a timeout: with the plate's Omega changed to
-    // 8.4e13 the check that the core's time lies inside its step integrated ~1e15 radians of
-    // plate motion before the cheaper checks ran. Refused at once now.
+    // A plate Omega of 8.4e13 is refused by the cheap range checks, at once, before the check
+    // that the core's time lies inside its step (which would integrate ~1e15 radians of plate
+    // motion).
     let t0 = std::time::Instant::now();
     let fast_plate = edit(&|s| {
         if let PlateRecord::Sinusoid { omega, .. } = &mut cp(s).plate {
@@ -965,8 +966,8 @@ fn well_formed_states_with_inconsistent_simulators_are_refused() {
 
 #[test]
 fn steps_longer_than_the_work_limit_are_refused_and_tiny_ones_accepted() {
-    // A step spanning more than 3e4 shaker radians is refused (it could run for seconds): found
-    // by the fuzz mode as a hang with h = 1e20 s and omega0 = 1e-9 rad/s (1e11 time units).
+    // A step spanning more than 3e4 shaker radians is refused (it could run for seconds), also
+    // with h = 1e20 s and omega0 = 1e-9 rad/s (1e11 time units).
     let mut f = Fmu::started(&[]);
     let s = f.step(3e4 / 1.75 * 1.001);
     f.assert_refused(s, "split it into shorter steps");
@@ -988,9 +989,9 @@ fn steps_longer_than_the_work_limit_are_refused_and_tiny_ones_accepted() {
 
 #[test]
 fn inputs_far_from_the_plate_are_blended_without_a_jump() {
-    // z_in = 1e12 m with delta_x = 1e-12 m is 1e24 in core units: the plate polynomial's first
-    // coefficient c0 + (z - c0) rounded away from the plate position z and the core refused the
-    // step as a plate jump. Found by the fuzz mode (22 refusals in seeds 1-60 of 20,000 calls).
+    // z_in = 1e12 m with delta_x = 1e-12 m is 1e24 in core units: a plate polynomial whose
+    // first coefficient is c0 + (z - c0) would round away from the plate position z, and the
+    // core would refuse the step as a plate jump.
     let params = [
         (var::shaker_mode, 2.0),
         (var::delta_x, 1e-12),
@@ -1007,10 +1008,10 @@ fn inputs_far_from_the_plate_are_blended_without_a_jump() {
 
 #[test]
 fn a_state_driven_far_out_of_scope_ends_in_a_discard_not_a_hang() {
-    // Found by the fuzz mode: delta_x = 1e-12 m and a plate input of -8.9e11 m/s (about 1e24 in
-    // core units) hurl the mass into oscillations whose period shrinks without bound; a step of
-    // 4.4e-4 s ran for hours. The work budget stops it with a Discard within seconds, at a state
-    // whose outputs are finite.
+    // delta_x = 1e-12 m and a plate input of -8.9e11 m/s (about 1e24 in core units) hurl the
+    // mass into oscillations whose period shrinks without bound; without a limit a step of
+    // 4.4e-4 s would run for hours. The work budget stops it with a Discard within seconds, at a
+    // state whose outputs are finite.
     let params = [
         (var::shaker_mode, 2.0),
         (var::delta_x, 1e-12),
@@ -1036,9 +1037,9 @@ fn a_state_driven_far_out_of_scope_ends_in_a_discard_not_a_hang() {
     ] {
         assert!(f.real(i).is_finite(), "{}", VARS[i].name);
     }
-    // Found by the setters fuzz target as a timeout: V = 1e6 (its maximum) and a step of
-    // 10,900 s; with a flat budget of 1e7 core steps the Discard took 6 s (a minute under the
-    // sanitizer). The budget grows with the step's span, at most 250,000 core steps (here).
+    // V = 1e6 (its maximum) and a step of 10,900 s: a flat budget of 1e7 core steps would take
+    // 6 s to reach the Discard (a minute under the sanitizer). The budget grows with the step's
+    // span, at most 250,000 core steps (here).
     // The work is bounded by that budget (no wall-clock assertion: timing belongs in benchmarks):
     // 100,000 + 50 per radian of the span 10,900 x 1.75, capped.
     let mut g = Fmu::started(&[(var::V, 1e6)]);
@@ -1444,8 +1445,7 @@ fn model_exchange_states_roll_back_and_refuse_the_other_interface() {
     }
 }
 
-/// Found by the long fuzz campaign: the host may set states across the barrier before it
-/// handles the barrier event (the well is updated in event mode), and an FMU state taken in
+/// The host may set states across the barrier before it handles the barrier event (the well is updated in event mode), and an FMU state taken in
 /// between is the FMU's own: it restores, and the next event update counts the snap-through.
 #[test]
 fn model_exchange_state_across_the_barrier_before_its_event_restores() {
@@ -1469,15 +1469,13 @@ fn model_exchange_state_across_the_barrier_before_its_event_restores() {
     }
 }
 
-/// Found by the C host's fuzz mode (seed 468 of 201-500, the Model Exchange part: one fuzz
-/// call "hung" until the 20 s watchdog): with `omega0 != 1` the time event of a chatter tail
-/// (its start of sticking, `until` in τ, announced as `until/omega0` s) was not due when the
-/// host set the time to it (`τ = t·omega0` came back an ulp before `until`), so every event
-/// update announced the same time again and a driver honouring time events stepped by 0 for
-/// ever (5.8 million event iterations in 8 s, each FMI call fast). These are the fuzz run's
-/// parameters from the paper's start; a driver that lands on every announced time event meets
-/// such a round trip at t = 32.9 s (this test failed there before the fix, with the no-progress
-/// assertion of [`me_run_timed`]). Work bound: every step advances, so the driver takes at most
+/// With `omega0 != 1` the time event of a chatter tail (its start of sticking, `until` in τ,
+/// announced as `until/omega0` s) must be due when the host sets the time to it, also when
+/// `τ = t·omega0` comes back an ulp before `until`; otherwise every event update announces the
+/// same time again and a driver honouring time events steps by 0 for ever (millions of event
+/// iterations, each FMI call fast). From the paper's start with these parameters, a driver that
+/// lands on every announced time event meets such a round trip at t = 32.9 s (a tail never due
+/// there fails the no-progress assertion of [`me_run_timed`]). Work bound: every step advances, so the driver takes at most
 /// one step per `h` plus one per time event and per bisected crossing; the chatter tails are
 /// applied and counted (impacts equal to co-simulation's).
 #[test]

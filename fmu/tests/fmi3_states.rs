@@ -7,13 +7,12 @@ use bistable_impact::exports3::*;
 use bistable_impact::fmi3::*;
 use bistable_impact::md::{var, GUID, VARS};
 
-/// Found by the FMI 3.0 fuzz mode (`host3 fuzz`, seed 261 of 201-500): an FMU state taken at an
-/// early return between two events of one instant was refused by its own instance ("simulator
+/// An FMU state taken at an early return between two events of one instant is the instance's
+/// own: its restore check must not take the pending event for a state beyond its step ("simulator
 /// time is not inside its current step"). Here the mass (v0 = -1e8 m/s, in range) hits the plate
 /// at t = 3.2e-9 s with e = 0; the plastic impact starts sticking at the same instant, an event
-/// still pending when the step returns early at the impact. The restore check took that pending
-/// event for a state beyond its step. Now the state restores, and the step after it repeats the
-/// original step bit for bit.
+/// still pending when the step returns early at the impact. The state restores, and the step
+/// after it repeats the original step bit for bit.
 #[test]
 fn a_state_between_two_events_of_one_instant_restores_and_repeats_the_step() {
     unsafe {

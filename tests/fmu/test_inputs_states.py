@@ -101,8 +101,8 @@ def test_one_ulp_in_every_sample_changes_x_by_at_most_1e_9():
     # The external_shaker regression case (h = 0.05): every z_in sample after the start one ulp
     # lower (the start sample places the plate under the mass at x0 = 0; one ulp lower there
     # would leave the mass 5e-324 above it and count the t = 0 impact in the first step instead).
-    # Before the Hermite scheme the plate acceleration was wrong by O(1) and this moved x by
-    # 1.1e-2 by t = 100.
+    # The plate acceleration interpolated from the samples must not amplify such a change (one
+    # wrong by O(1) would move x by about 1e-2 by t = 100).
     def lower(z):
         z = z.copy()
         z[1:] = np.nextafter(z[1:], -np.inf)

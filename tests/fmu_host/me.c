@@ -206,15 +206,14 @@ static void me_illegal_calls(void) {
     F.fmi2FreeInstance(c);
 }
 
-/* Found by the fuzz mode (seed 468, 20,000 calls: its Model Exchange part ran into the 20 s
- * watchdog): with omega0 != 1 the time event of a chatter tail (start of sticking, announced as
- * until/omega0 s) was not due when the driver set the time to it (t*omega0 came back an ulp before
- * until), so every event update announced the same time and this driver stepped by 0 for ever
- * (5.8 million event modes in 8 s). The fuzz run's parameters from the paper's start: the run
- * reaches t = 60 with every time event after the time of its update (me_run returns
- * ME_NO_PROGRESS otherwise, as it did before the fix with this h, after 4 impacts), its work
- * bounded by its steps of size h (event modes: at most a tenth of them), and it counts the
- * co-simulation's impacts (the tails were applied). */
+/* With omega0 != 1 the time event of a chatter tail (start of sticking, announced as
+ * until/omega0 s) must be due when the driver sets the time to it, also when t*omega0 comes back
+ * an ulp before until; otherwise every event update announces the same time and this driver
+ * steps by 0 for ever. From the paper's start with these parameters the run reaches t = 60 with
+ * every time event after the time of its update (me_run returns ME_NO_PROGRESS otherwise, which
+ * a tail never due causes with this h after 4 impacts), its work bounded by its steps of size h
+ * (event modes: at most a tenth of them), and it counts the co-simulation's impacts (the tails
+ * were applied). */
 static void me_time_events_progress(void) {
     const char *names[5] = {"omega0", "Omega", "V", "e", "zeta"};
     const fmi2Real vals[5] = {1.2314973701554512, 0.31567602743490469, 0.016579423043057092,

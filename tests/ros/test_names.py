@@ -32,9 +32,9 @@ def test_two_rigs_in_one_domain_see_only_their_own_impacts():
     for name, sink in clocks.items():
         peer.node.create_subscription(Clock, name, sink.append, 10)
     common = ("-p", "real_time_factor:=25.0", "-p", "publish_rate:=20")
-    # The DDS layer's discovery events in the nodes' logs, for a failure to show (CI of stops 30
-    # and 31: the nodes matched the peer's readers, the peer knew only their last-created
-    # writer, and no sample arrived; not reproduced here).
+    # The DDS layer's discovery events in the nodes' logs, for a failure to show which side
+    # discovery stopped on (e.g. the nodes matched the peer's readers while the peer knew only
+    # their last-created writer, and no sample arrived).
     dds_info = {"BISTABLE_DDS_LOG": "info"}
     rig1 = NodeProcess(*RIG1, *common, domain=domain, env=dds_info)
     rig2 = NodeProcess(*RIG2, *common, domain=domain, env=dds_info)
@@ -53,8 +53,8 @@ def test_two_rigs_in_one_domain_see_only_their_own_impacts():
                                  f"publishers {publishers}; sockets:\n{sockets}\n"
                                  f"rig1 log:\n{logs[0]}\nrig2 log:\n{logs[1]}")
         # The ROS graph is eventually consistent: the announcement of a node's reader (shaker_command)
-        # can reach the peer after the first samples of the node's writers (CI of stop 31: the
-        # impacts to t = 60 arrived within 3 s, the readers were not yet in the graph).
+        # can reach the peer after the first samples of the node's writers (the impacts to t = 60
+        # can arrive before the readers are in the graph), so the graph is awaited on its own.
         wanted = ["/rig1/bistable/mass_state", "/rig1/bistable/impacts", "/rig1/bistable/shaker_command",
                   "/rig2/bistable/mass_state", "/rig2/sim2/hits", "/rig2/bistable/shaker_command"]
         graph = lambda: (peer.node.get_node_names_and_namespaces(), dict(peer.node.get_topic_names_and_types()))

@@ -69,8 +69,11 @@ Units: everything is nondimensional as in the paper (doi 10.1007/s11071-022-0779
 x = 1, barrier at x = 1/2), velocities in units of ω0·Δx, energies in units of k0·Δx². Phases are \
 in shaker cycles, in [0, 1).
 
-Exit codes: 0 success; 2 invalid or missing options or option values; 1 a file could not be \
-written or the simulation failed.";
+Environment: BISTABLE_SIMD=auto|portable|avx2|avx512 forces the SIMD code path (default auto: \
+the widest the CPU has; the results are the same on every path, only the speed differs).
+
+Exit codes: 0 success; 2 invalid or missing options or option values, or a refused BISTABLE_SIMD \
+(unknown value, or a path the CPU lacks); 1 a file could not be written or the simulation failed.";
 
 /// Simulate and analyse a bistable oscillator driven only by impacts with a sinusoidally vibrating
 /// shaker plate.
@@ -137,6 +140,11 @@ enum Command {
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
+    // A refused BISTABLE_SIMD (unknown value, or a path the CPU lacks) is a bad option.
+    if let Err(e) = bistable_core::simd::check() {
+        eprintln!("error: {e}");
+        return ExitCode::from(2);
+    }
     let result = match &cli.command {
         Command::Simulate(args) => simulate::run(args),
         Command::Classify(args) => classify::run(args),

@@ -419,7 +419,7 @@ fn invalid_values_exit_2_and_name_the_option() {
         ("-1", "0.07", "--omega"),
         ("0", "0.07", "--omega"),
         ("nan", "0.07", "--omega"),
-        // Beyond the core's range of Ω (a run at Ω = 1e20 used to fall through the plate).
+        // Beyond the core's range of Ω (a run at Ω = 1e20 would fall through the plate).
         ("1e20", "0.07", "--omega"),
         ("1.0000000000000002e6", "0.07", "--omega"),
         ("9.9e-7", "0.07", "--omega"),

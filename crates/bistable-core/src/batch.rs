@@ -21,10 +21,11 @@ use std::ops::ControlFlow;
 use crate::events::Event;
 use crate::lanes::{F64x4, F64x8, Lane, Width};
 use crate::params::{Params, SolverOptions};
-use crate::potential::BARRIER;
 use crate::roots::certified_clear;
-use crate::simulator::{LaneEnd, LaneStart, Observer, Progress, SimError, Simulator};
-use crate::taylor::{self, FlightSeries, VariationSeries, BUF, MAX_STEP};
+use crate::shaker::scale_by_phase;
+use crate::simd;
+use crate::simulator::{barrier_far, LaneEnd, LaneStart, Observer, Progress, SimError, Simulator};
+use crate::taylor::{self, eval_d, FlightSeries, VariationSeries, BUF};
 use crate::time::Instant;
 
 /// Receives the events of every lane of a [`Batch`], tagged with the lane.
@@ -490,15 +491,16 @@ impl Kernel {
     }
 }
 
-/// `$name` runs the kernel over `$lanes` in registers of `$feature` where the CPU has it (the
-/// kernel is compiled a second time, in `$fast`, for that feature), portably otherwise; the
-/// results are the same.
+/// `$name` runs the kernel over `$lanes` in registers of `$feature` where the SIMD path in use
+/// allows it (`$allowed`: the CPU has it and `BISTABLE_SIMD` does not rule it out, see
+/// [`crate::simd`]; the kernel is compiled a second time, in `$fast`, for that feature),
+/// portably otherwise; the results are the same.
 macro_rules! dispatch {
-    ($name:ident, $fast:ident, $lanes:ty, $feature:tt) => {
+    ($name:ident, $fast:ident, $lanes:ty, $feature:tt, $allowed:path) => {
         fn $name(s: &mut Soa<$lanes>, c: &Consts, starts: &[(usize, LaneStart)]) {
             #[cfg(target_arch = "x86_64")]
-            if std::arch::is_x86_feature_detected!($feature) {
-                // SAFETY: the CPU has the feature, checked just above.
+            if $allowed() {
+                // SAFETY: the CPU has the feature (the path allows only features it has).
                 return unsafe { $fast(s, c, starts) };
             }
             s.run(c, starts)
@@ -512,8 +514,8 @@ macro_rules! dispatch {
     };
 }
 
-dispatch!(run8, run8_avx512, F64x8, "avx512f");
-dispatch!(run4, run4_avx2, F64x4, "avx2");
+dispatch!(run8, run8_avx512, F64x8, "avx512f", simd::avx512f);
+dispatch!(run4, run4_avx2, F64x4, "avx2", simd::avx2);
 
 /// The lanes' starts, side by side ([`LaneStart`]).
 struct Inputs<T> {
@@ -564,16 +566,10 @@ fn kernel<T: Lane, const VAR: bool>(
 ) -> Verdicts<T> {
     let p = c.order;
     let zero = T::splat(0.0);
-    // Plate series (`Sinusoid::scale_by_phase`): magnitudes times sin, cos, −sin, −cos.
-    let cycle = [inp.sin, inp.cos, -inp.sin, -inp.cos];
-    for (k, zk) in z.iter_mut().enumerate() {
-        *zk = if k < p + 3 {
-            mags[k] * cycle[k % 4]
-        } else {
-            zero
-        };
-    }
-    z[0] += inp.offset;
+    // Plate series: the magnitudes scaled by the phase, as `PlateEval::series` computes them.
+    z[..p + 3].copy_from_slice(&mags[..p + 3]);
+    z[p + 3..].fill(zero);
+    scale_by_phase(inp.sin, inp.cos, inp.offset, &mut z[..p + 3]);
     if VAR {
         var.d[0] = inp.phi[0];
         var.d[1] = inp.phi[1];
@@ -585,40 +581,11 @@ fn kernel<T: Lane, const VAR: bool>(
         spread += zero * xk;
     }
     let finite = spread.equal(zero);
-    // Step size (`taylor::step_size` over the series of x and of the gap).
+    // Step size over the series of x and of the gap (a sinusoid has no horizon to cut it).
     let (x, u) = (&s.x, &s.u);
-    let scale = T::splat(1.0)
-        .max(x[0].abs().max(x[1].abs()))
-        .max(u[0].abs().max(u[1].abs()));
-    let eps = T::splat(c.tol) * scale;
-    let last = zero.max(x[p].abs()).max(u[p].abs());
-    let prev = zero.max(x[p - 1].abs()).max(u[p - 1].abs());
-    let mut ln_eps = eps;
-    for i in 0..T::LANES {
-        let v = if scale.lane(i) == 1.0 {
-            c.ln_tol
-        } else {
-            eps.lane(i).ln()
-        };
-        ln_eps.set_lane(i, v);
-    }
-    let l1 = (ln_eps - prev.map(f64::ln) - T::splat(0.7)) / T::splat((p - 1) as f64);
-    let l2 = (ln_eps - last.map(f64::ln)) / T::splat(p as f64) - T::splat(0.7 / (p - 1) as f64);
-    let h = l1
-        .min(l2)
-        .map(f64::exp)
-        .min(T::splat(MAX_STEP))
-        .min(T::splat(f64::INFINITY));
-    // Barrier bound (`barrier_far`).
-    let (mut reach, mut hk) = (zero, T::splat(1.0));
-    for &xk in &x[1..=p + 1] {
-        hk *= h;
-        reach += xk.abs() * hk;
-    }
-    let far = T::and(
-        inp.free_of_barrier.equal(T::splat(1.0)),
-        (inp.sign * (x[0] - T::splat(BARRIER))).gt(reach),
-    );
+    let h = taylor::step_size(&[&x[..=p], &u[..=p]], p, c.tol, c.ln_tol);
+    let free = inp.free_of_barrier.equal(T::splat(1.0));
+    let far = barrier_far(free, inp.sign, &x[..=p + 1], h);
     // The gap from its first coefficient that does not vanish: from `u_1` where the step
     // leaves the plate (`u_0 = 0` divided out; the top coefficient padded with zero, which
     // changes no comparison of the certificates).
@@ -629,12 +596,8 @@ fn kernel<T: Lane, const VAR: bool>(
         gap[k] = T::select(leaving, next, u[k]);
     }
     let clear = certified_clear(&gap[..=p + 1], h, bern);
-    // Gap and gap rate at h (`eval_d`).
-    let (mut u1, mut w1) = (zero, zero);
-    for &ck in u[..=p + 1].iter().rev() {
-        w1 = w1 * h + u1;
-        u1 = u1 * h + ck;
-    }
+    // Gap and gap rate at h.
+    let (u1, w1) = eval_d(&u[..=p + 1], h);
     Verdicts {
         finite,
         h,

@@ -136,6 +136,14 @@ macro_rules! lanes {
             }
         }
 
+        impl From<f64> for $name {
+            /// Every lane `v`.
+            #[inline(always)]
+            fn from(v: f64) -> Self {
+                Self([v; $n])
+            }
+        }
+
         impl $name {
             #[inline(always)]
             fn zip(self, o: Self, f: impl Fn(f64, f64) -> f64) -> Self {

@@ -33,6 +33,7 @@ mod roots;
 pub mod sampled;
 pub mod shaker;
 pub mod shooting;
+pub mod simd;
 pub mod simulator;
 pub mod taylor;
 pub mod time;
@@ -54,6 +55,7 @@ pub use sampled::{PieceMemo, Sample, SampleHistory};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
 pub use shaker::{MAX_VELOCITY, OMEGA_RANGE};
 pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
+pub use simd::SimdPath;
 pub use simulator::{
     Flights, Observer, SimError, Simulator, State, Stats, StepKey, StepView, FLIGHT_LANES,
 };

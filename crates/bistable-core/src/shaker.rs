@@ -5,6 +5,7 @@
 
 use std::ops::RangeInclusive;
 
+use crate::lanes::Lane;
 use crate::params::{check, ParamError};
 use crate::taylor::BUF;
 use crate::time::Instant;
@@ -121,7 +122,7 @@ impl Sinusoid {
     fn series(&self, t: Instant, out: &mut [f64]) {
         self.magnitudes(out);
         let (s, c) = self.angle(t).sin_cos();
-        self.scale_by_phase(s, c, out);
+        scale_by_phase(s, c, self.offset, out);
     }
 
     /// Magnitudes `(V/Ω) Ω^k/k!` of the series coefficients: the part that does not depend on
@@ -135,22 +136,25 @@ impl Sinusoid {
             *o = a;
         }
     }
+}
 
-    /// The series from its magnitudes in `out` and the sine and cosine of the phase angle.
-    fn scale_by_phase(&self, s: f64, c: f64, out: &mut [f64]) {
-        // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
-        let cycle = [s, c, -s, -c];
-        let (quads, rest) = out.as_chunks_mut::<4>();
-        for q in quads {
-            for (o, f) in q.iter_mut().zip(cycle) {
-                *o *= f;
-            }
-        }
-        for (o, f) in rest.iter_mut().zip(cycle) {
+/// A sinusoid's series from its magnitudes in `out`, the sine `s` and cosine `c` of its phase
+/// angle and its `offset`, for one sinusoid (`f64`) or one per lane of a batch ([`Lane`]; the
+/// same operations in each lane).
+#[inline(always)]
+pub(crate) fn scale_by_phase<T: Lane>(s: T, c: T, offset: T, out: &mut [T]) {
+    // d^k/dτ^k sin(θ) = sin(θ + kπ/2): the cycle sin, cos, −sin, −cos.
+    let cycle = [s, c, -s, -c];
+    let (quads, rest) = out.as_chunks_mut::<4>();
+    for q in quads {
+        for (o, f) in q.iter_mut().zip(cycle) {
             *o *= f;
         }
-        out[0] += self.offset;
     }
+    for (o, f) in rest.iter_mut().zip(cycle) {
+        *o *= f;
+    }
+    out[0] += offset;
 }
 
 /// A phase angle in `[−π, π)` in cycles, in `[0, 1)`.
@@ -425,7 +429,7 @@ impl PlateEval {
             PlateMotion::Sinusoid(s) => {
                 let (_, sn, cs) = self.trig(&s, t);
                 out.copy_from_slice(&self.mags[..out.len()]);
-                s.scale_by_phase(sn, cs, out);
+                scale_by_phase(sn, cs, s.offset, out);
             }
             PlateMotion::Poly(p) => p.series(t, out),
         }

@@ -333,7 +333,7 @@ impl Guard {
             accel += (k * (k - 1)) as f64 * xk.abs() * hk;
             hk *= reach;
         }
-        let far = barrier_far(well, on_barrier, x, reach);
+        let far = barrier_far(!on_barrier, sign(well), x, reach);
         Self {
             usable: far && size < 1e100 && speed < 1e100 && accel < 1e100,
             accel,
@@ -678,8 +678,8 @@ impl Simulator {
     /// evaluation, see [`crate::lanes`]). For the other instants ask `mass_at`.
     pub fn flights_at(&self, taus: &[f64; FLIGHT_LANES], out: &mut Flights) {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("avx512f") {
-            // SAFETY: the CPU has the feature, checked just above.
+        if crate::simd::avx512f() {
+            // SAFETY: the CPU has the feature (the SIMD path allows only features it has).
             return unsafe { self.flights_at_avx512(taus, out) };
         }
         self.flights_in_lanes(taus, out)
@@ -1402,7 +1402,7 @@ impl Simulator {
                 }
                 // Checked for the whole step first, alongside the root search: far from the
                 // barrier over `h`, so over any shorter step too.
-                let far = barrier_far(self.well, self.on_barrier, &s.x[..=p + 1], h);
+                let far = barrier_far(!self.on_barrier, sign(self.well), &s.x[..=p + 1], h);
                 self.end_free_step(m, h, false, far, None);
                 self.step.reach = reach;
             }
@@ -1426,7 +1426,7 @@ impl Simulator {
                 if h.is_nan() || h < 0.0 {
                     return Err(nonfinite);
                 }
-                let far = barrier_far(self.well, self.on_barrier, &z[..=p], h);
+                let far = barrier_far(!self.on_barrier, sign(self.well), &z[..=p], h);
                 step.len = h;
                 step.end = StepEnd::Plain;
                 if let Some(r) = m.and_then(|m| first_root(&n[m..], h)) {
@@ -1743,28 +1743,36 @@ impl Simulator {
     }
 }
 
-/// Whether the series `x` of the position stays clear of `x = ½` over `(0, h]` by the bound
-/// `|x(s) − x(0)| ≤ Σ_{k≥1} |x_k| h^k`, which settles most steps. The bound only grows with
-/// `h` (also as computed: rounding is monotone), so clear over `h` means clear over any
-/// shorter step.
-fn barrier_far(well: Well, on_barrier: bool, x: &[f64], h: f64) -> bool {
-    if on_barrier {
-        return false;
+/// `+1` in well 2, `−1` in well 1: the side of the barrier `x = ½` the mass is on.
+fn sign(well: Well) -> f64 {
+    if well == Well::Two {
+        1.0
+    } else {
+        -1.0
     }
-    let sign = if well == Well::Two { 1.0 } else { -1.0 };
-    let (mut reach, mut hk) = (0.0, 1.0);
+}
+
+/// Whether the series `x` of the position stays clear of `x = ½` over `(0, h]` by the bound
+/// `|x(s) − x(0)| ≤ Σ_{k≥1} |x_k| h^k`, which settles most steps: never where the step starts
+/// on the barrier (`free` false), else where the bound keeps `x` on its side (`sign`, see
+/// [`sign`]). The bound only grows with `h` (also as computed: rounding is monotone), so clear
+/// over `h` means clear over any shorter step. For one trajectory (`f64`) or one per lane of a
+/// batch ([`Lane`]).
+#[inline(always)]
+pub(crate) fn barrier_far<T: Lane>(free: T::Mask, sign: T, x: &[T], h: T) -> T::Mask {
+    let (mut reach, mut hk) = (T::splat(0.0), T::splat(1.0));
     for &xk in &x[1..] {
         hk *= h;
         reach += xk.abs() * hk;
     }
-    sign * (x[0] - BARRIER) > reach
+    T::and(free, (sign * (x[0] - T::splat(BARRIER))).gt(reach))
 }
 
 /// First crossing of `x = ½` out of `well` within `(0, h]`, for the series `x` of the position
 /// (`on_barrier`: the step starts on the barrier, so that root is divided out).
 fn barrier_root(well: Well, on_barrier: bool, x: &[f64], h: f64) -> Option<f64> {
-    let sign = if well == Well::Two { 1.0 } else { -1.0 };
-    if barrier_far(well, on_barrier, x, h) {
+    let sign = sign(well);
+    if barrier_far(!on_barrier, sign, x, h) {
         return None;
     }
     let mut g = [0.0; BUF];

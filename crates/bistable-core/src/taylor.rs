@@ -298,23 +298,37 @@ pub(crate) fn contact_force(zeta: f64, z: &[f64; BUF], order: usize) -> [f64; BU
 
 /// Jorba–Zou step size from the last two coefficients of the given series (each a slice of
 /// coefficients `0..=order`), for an absolute tolerance scaled by the size of the state
-/// (`ln_tol`: `tol.ln()`, the log of the tolerance when that size is at most 1).
-pub(crate) fn step_size(series: &[&[f64]], order: usize, tol: f64, ln_tol: f64) -> f64 {
+/// (`ln_tol`: `tol.ln()`, the log of the tolerance when that size is at most 1). For one
+/// trajectory (`f64`) or one per lane of a batch ([`Lane`]; `ln` and `exp` lane by lane).
+#[inline(always)]
+pub(crate) fn step_size<T: Lane>(series: &[&[T]], order: usize, tol: f64, ln_tol: f64) -> T {
     let scale = series
         .iter()
         .map(|c| c[0].abs().max(c[1].abs()))
-        .fold(1.0_f64, f64::max);
-    let eps = tol * scale;
-    let last = series.iter().map(|c| c[order].abs()).fold(0.0, f64::max);
+        .fold(T::splat(1.0), T::max);
+    let eps = T::splat(tol) * scale;
+    let last = series
+        .iter()
+        .map(|c| c[order].abs())
+        .fold(T::splat(0.0), T::max);
     let prev = series
         .iter()
         .map(|c| c[order - 1].abs())
-        .fold(0.0, f64::max);
+        .fold(T::splat(0.0), T::max);
     // min((ε/prev)^(1/(p−1)), (ε/last)^(1/p)) times the safety factor e^(−0.7/(p−1)), in logs.
-    let ln_eps = if scale == 1.0 { ln_tol } else { eps.ln() };
-    let l1 = (ln_eps - prev.ln() - 0.7) / (order - 1) as f64;
-    let l2 = (ln_eps - last.ln()) / order as f64 - 0.7 / (order - 1) as f64;
-    l1.min(l2).exp().min(MAX_STEP)
+    let mut ln_eps = eps;
+    for i in 0..T::LANES {
+        let v = if scale.lane(i) == 1.0 {
+            ln_tol
+        } else {
+            eps.lane(i).ln()
+        };
+        ln_eps.set_lane(i, v);
+    }
+    let l1 = (ln_eps - prev.map(f64::ln) - T::splat(0.7)) / T::splat((order - 1) as f64);
+    let l2 =
+        (ln_eps - last.map(f64::ln)) / T::splat(order as f64) - T::splat(0.7 / (order - 1) as f64);
+    l1.min(l2).map(f64::exp).min(T::splat(MAX_STEP))
 }
 
 /// Upper bound on any step (time units): a series that vanishes identically gives no bound.
@@ -326,15 +340,16 @@ pub(crate) fn eval(c: &[f64], s: f64) -> f64 {
     c.iter().rev().fold(0.0, |acc, &ck| acc * s + ck)
 }
 
-/// Value and derivative of `Σ c_k s^k`, at one `s` (`f64`) or at one per lane (inlined, so
-/// that a caller compiled for wider registers evaluates the lanes in them).
+/// Value and derivative of `Σ c_k s^k`, at one `s` (`f64`) or at one per lane, with the same
+/// coefficients for every lane (`C = f64`) or each lane's own (`C = L`) (inlined, so that a
+/// caller compiled for wider registers evaluates the lanes in them).
 #[inline(always)]
-pub(crate) fn eval_d<L: Lane>(c: &[f64], s: L) -> (L, L) {
+pub(crate) fn eval_d<L: Lane + From<C>, C: Copy>(c: &[C], s: L) -> (L, L) {
     let mut p = L::splat(0.0);
     let mut d = L::splat(0.0);
     for &ck in c.iter().rev() {
         d = d * s + p;
-        p = p * s + L::splat(ck);
+        p = p * s + L::from(ck);
     }
     (p, d)
 }

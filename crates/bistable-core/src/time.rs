@@ -117,8 +117,8 @@ impl Instant {
     /// instant whose product with `ω` stays below `2^52`.
     pub fn angle(self, origin: Instant, omega: f64, offset: f64) -> f64 {
         #[cfg(target_arch = "x86_64")]
-        if std::arch::is_x86_feature_detected!("fma") {
-            // SAFETY: the CPU has FMA, checked just above.
+        if crate::simd::fma() {
+            // SAFETY: the CPU has FMA (the SIMD path allows only features it has).
             return unsafe { self.angle_fma(origin, omega, offset) };
         }
         self.angle_by::<false>(origin, omega, offset)

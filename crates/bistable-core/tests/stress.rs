@@ -92,10 +92,10 @@ fn quasi_static_escape_threshold() {
 
 #[test]
 fn set_point_change_that_pulls_the_riding_mass_off_releases_it() {
-    // Regression (found by `make stress`): the mass rides the plate above the barrier (x ≈ 0.6,
-    // where the spring pulls it towards x = 1) when the shaker slows down; the contact force
-    // is negative at once. The release used to treat the gap's curvature −N/2 as zero (as at a
-    // root of N) and stuck the mass again at the same instant, forever (reported as NonFinite).
+    // The mass rides the plate above the barrier (x ≈ 0.6, where the spring pulls it towards
+    // x = 1) when the shaker slows down; the contact force is negative at once. A release that
+    // took the gap's curvature −N/2 for zero (as at a root of N) would stick the mass again at
+    // the same instant, forever (reported as NonFinite).
     let params = Params::new(0.297834921580372, 0.3847785231919063).unwrap();
     let plate = Sinusoid::new(0.4853486184497703, 0.16201005289944959).unwrap();
     let opts = SolverOptions::new(1e-15, ChatterRule::Accumulation { horizon: 1e-7 }).unwrap();

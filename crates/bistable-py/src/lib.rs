@@ -44,6 +44,9 @@ fn linspace(py: Python<'_>, start: f64, end: f64, n: usize) -> PyResult<Vec<f64>
 
 #[pymodule]
 fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
+    // A refused BISTABLE_SIMD (unknown value, or a path the CPU lacks) fails the import.
+    bistable_core::simd::check()
+        .map_err(|e| pyo3::exceptions::PyImportError::new_err(e.to_string()))?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
     m.add_class::<simulate::PySimulator>()?;
     m.add_function(wrap_pyfunction!(classify::classify, m)?)?;

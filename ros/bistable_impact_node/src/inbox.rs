@@ -124,9 +124,9 @@ mod tests {
 
     #[test]
     fn samples_after_an_unreadable_one_are_taken_in_the_same_call() {
-        // Regression: the loop used to stop at the first sample that failed to deserialize,
-        // so with a mix of malformed and valid samples it took a few per publish tick and the
-        // reader's keep-last history dropped the rest (valid commands lost).
+        // A loop that stopped at the first sample that failed to deserialize would take a few
+        // of a mix of malformed and valid samples per publish tick, and the reader's keep-last
+        // history would drop the rest (valid commands lost).
         let mut runner = Runner::new(&Settings::default()).unwrap();
         let valid = ShakerCommand {
             mode: ShakerCommand::MODE_SINUSOID,
