@@ -196,7 +196,9 @@ unsafe fn instantiate(
                 "fmuGUID {g} does not match this binary's {GUID}: modelDescription.xml and binary come from different builds"
             ));
         }
-        Ok(())
+        bistable_core::simd::check()
+            .map(drop)
+            .map_err(|e| e.to_string())
     })();
     match checked {
         Ok(()) => Box::into_raw(Box::new(inst)).cast(),

@@ -91,6 +91,7 @@ unsafe fn instantiate(
                 "instantiationToken {t} does not match this binary's {GUID}: modelDescription.xml and binary come from different builds"
             ));
         }
+        bistable_core::simd::check().map_err(|e| e.to_string())?;
         extra
     })();
     match checked {

@@ -68,16 +68,20 @@ def test_launch_file_starts_the_installed_node_with_its_parameter_file(monkeypat
     assert k["namespace"].args == ("namespace",)
 
 
-def run(*args, domain=None):
+def run(*args, domain=None, simd=None):
     env = dict(os.environ)
     if domain is not None:
         env["ROS_DOMAIN_ID"] = domain
+    if simd is not None:
+        env["BISTABLE_SIMD"] = simd
     return subprocess.run([NODE, *args], capture_output=True, text=True, timeout=20, env=env)
 
 
 def test_help_and_refused_command_lines():
     r = run("--help")
     assert r.returncode == 0
+    r = run(simd="avx9000")
+    assert r.returncode == 2 and 'BISTABLE_SIMD="avx9000" is not a SIMD path' in r.stderr, (r.returncode, r.stderr)
     for name in ["zeta", "omega0", "delta_x", "Omega", "V", "publish_rate", "real_time_factor", "frame_id",
                  "history_depth", "__ns:="]:
         assert name in r.stdout

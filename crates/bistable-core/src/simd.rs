@@ -16,8 +16,9 @@
 //! | `portable` | nothing beyond the build's baseline (no AVX, no FMA): the path of a CPU with neither |
 //!
 //! Any other value, or a path the CPU lacks, is refused: [`check`] tells why (the command-line
-//! program exits with code 2 and that message, the Python package raises `ImportError`), and a
-//! program that does not check panics with the same message at the first dispatch.
+//! program and the ROS node exit with code 2 and that message, the Python package raises
+//! `ImportError`, the FMU's instantiate functions log it and return NULL), and a program that
+//! does not check panics with the same message at the first dispatch.
 
 use std::fmt;
 use std::sync::OnceLock;

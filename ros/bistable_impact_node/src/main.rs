@@ -16,14 +16,18 @@ fn main() -> ExitCode {
             print_help();
             ExitCode::SUCCESS
         }
-        Ok(Parsed::Run(cfg)) => match args::discovery_range(
-            std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
-                .ok()
-                .as_deref(),
-            std::env::var("ROS_LOCALHOST_ONLY").ok().as_deref(),
-        )
-        .map_err(|e| (e, ExitCode::from(2)))
-        .and_then(|range| node::run::run(*cfg, range).map_err(|e| (e, ExitCode::FAILURE)))
+        Ok(Parsed::Run(cfg)) => match bistable_core::simd::check()
+            .map_err(|e| e.to_string())
+            .and_then(|_| {
+                args::discovery_range(
+                    std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
+                        .ok()
+                        .as_deref(),
+                    std::env::var("ROS_LOCALHOST_ONLY").ok().as_deref(),
+                )
+            })
+            .map_err(|e| (e, ExitCode::from(2)))
+            .and_then(|range| node::run::run(*cfg, range).map_err(|e| (e, ExitCode::FAILURE)))
         {
             Ok(()) => ExitCode::SUCCESS,
             Err((e, code)) => {
