@@ -105,11 +105,13 @@ enum Command {
     #[command(long_about = map::LONG_ABOUT, after_help = map::AFTER_HELP)]
     Map(map::MapArgs),
 
-    /// Bifurcation diagram (Fig. 6/8): max x per shaker cycle and impact phases against Ω or
-    /// V, with periodic-orbit branches.
+    /// Basins of attraction at one (Ω, V): the attractor every start of an (x0, x0') grid
+    /// reaches, basin fractions, uncertainty exponent; CSV, PNG.
     #[command(long_about = basins::LONG_ABOUT, after_help = basins::AFTER_HELP)]
     Basins(basins::BasinsArgs),
 
+    /// Bifurcation diagram (Fig. 6/8): max x per shaker cycle and impact phases against Ω or
+    /// V, with periodic-orbit branches.
     #[command(long_about = bifurcation::LONG_ABOUT, after_help = bifurcation::AFTER_HELP)]
     Bifurcation(bifurcation::BifurcationArgs),
 
