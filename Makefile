@@ -32,7 +32,10 @@ lint: setup
 
 ## Every test: formatting, lints, Rust unit/integration/doc tests, and the components' suites.
 test: lint
-	$(MAKE) --no-print-directory $(TEST_TARGETS)
+	@for t in $(TEST_TARGETS); do start=$$(date +%s); \
+		$(MAKE) --no-print-directory $$t || exit 1; \
+		echo "make test: $$t passed in $$(( $$(date +%s) - start )) s"; \
+	done
 	@echo "make test: all suites passed"
 
 # The CLI's 30 x 20 map for every lane width runs in test-simd, on each SIMD path.
