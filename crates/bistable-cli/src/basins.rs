@@ -38,7 +38,7 @@ final well and, when periodic, the section point (x, x') at plate phase 0 of
 their cycle with the smallest x (coexisting orbits of one period and class,
 e.g. low- and high-energy P-1 in well 1, differ there).
 
-Decision by recurrence (the default; --full turns it off): a start stops as soon
+Decision by recurrence (the default; --full-decision turns it off): a start stops as soon
 as --recurrence-hits (2) consecutive section points (plate phase 0) lie within
 the capture radius of the cycle points of a periodic attractor already found
 here. Each periodic attractor is found and classified once by the full decision;
@@ -135,7 +135,7 @@ pub struct BasinsArgs {
 
     /// Decide every start in full (no recurrence onto known attractors).
     #[arg(long)]
-    pub full: bool,
+    pub full_decision: bool,
 
     /// Consecutive section points on a known attractor that decide a start by recurrence.
     #[arg(long, value_name = "N", default_value_t = 2)]
@@ -280,7 +280,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     }
     .check()?;
     let (threads, width) = args.grid.parallel()?;
-    let decision = if args.full {
+    let decision = if args.full_decision {
         Decision::Full
     } else {
         Decision::Recurrence(
