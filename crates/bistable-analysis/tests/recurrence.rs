@@ -61,7 +61,7 @@ fn set(attractors: &[Attractor]) -> Vec<Attractor> {
         .iter()
         .map(|a| Attractor { cells: 0, ..*a })
         .collect();
-    s.sort_by(|a, b| a.steady.label().cmp(&b.steady.label()));
+    s.sort_by_key(|a| a.steady.label());
     s
 }
 
