@@ -17,6 +17,11 @@
 //! scales like `ε^α` for small `ε`; `α` is fitted by least squares on `ln f` against `ln ε`,
 //! and `2 − α` is the box-counting dimension of the basin boundary in the `(x0, x0')` plane
 //! (`α = 1`: smooth boundaries; `α < 1`: fractal).
+//!
+//! How each start is decided ([`Decision`]): in full (every start runs until the period
+//! repeats, the mass rests in well 2 or the run reaches its limit), or by recurrence
+//! ([`crate::recurrence`]: a start stops once it is known to be on a periodic attractor
+//! already found at this point; the default of `bistable basins`).
 
 use bistable_core::{
     Classification, ClassifyOptions, ParamError, ResponseClass, SimError, Sinusoid, Tracking, Well,
@@ -25,6 +30,7 @@ use bistable_core::{
 
 use crate::ensemble::{self, run_alone, Run, Task};
 use crate::parallel::Threads;
+use crate::recurrence::{self, KnownAttractor, RecurrenceOptions};
 use crate::sensitivity::Outcome;
 use crate::Model;
 
@@ -68,6 +74,36 @@ pub struct Cell {
     pub at_rest: bool,
     /// Natural periods simulated.
     pub periods_simulated: f64,
+    /// How the outcome was decided.
+    pub decided_by: DecidedBy,
+}
+
+/// How a cell's outcome was decided.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum DecidedBy {
+    /// The full decision of its own run ([`bistable_core::classify_from`]).
+    Full,
+    /// Captured by a known periodic attractor ([`crate::recurrence`]).
+    Recurrence,
+}
+
+impl DecidedBy {
+    /// `full` or `recurrence`.
+    pub fn name(self) -> &'static str {
+        match self {
+            DecidedBy::Full => "full",
+            DecidedBy::Recurrence => "recurrence",
+        }
+    }
+}
+
+/// How the starts of a grid are decided.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Decision {
+    /// Every start runs to the full decision.
+    Full,
+    /// By recurrence onto the periodic attractors found so far ([`crate::recurrence`]).
+    Recurrence(RecurrenceOptions),
 }
 
 impl Cell {
@@ -130,13 +166,13 @@ pub fn basin_cell(
 }
 
 /// A basin cell as a [`Task`]: one classification run from its start.
-struct CellTask {
+pub(crate) struct CellTask {
     run: Run,
     result: Option<Classification>,
 }
 
 impl CellTask {
-    fn new(
+    pub(crate) fn new(
         model: &Model,
         phase: f64,
         x0: f64,
@@ -154,6 +190,11 @@ impl CellTask {
             },
             result: None,
         })
+    }
+
+    /// The cell's run.
+    pub(crate) fn run(&self) -> Run {
+        self.run
     }
 }
 
@@ -177,8 +218,8 @@ impl Task for CellTask {
     }
 }
 
-/// The cell of the start `(x0, x0')` whose run gave `c`.
-fn cell_of(x0: f64, v0: f64, c: &Classification) -> Cell {
+/// The cell of the start `(x0, x0')` whose run gave `c` (decided in full).
+pub(crate) fn cell_of(x0: f64, v0: f64, c: &Classification) -> Cell {
     Cell {
         x0,
         v0,
@@ -190,6 +231,7 @@ fn cell_of(x0: f64, v0: f64, c: &Classification) -> Cell {
         },
         at_rest: c.at_rest_in_second_well,
         periods_simulated: c.periods_simulated,
+        decided_by: DecidedBy::Full,
     }
 }
 
@@ -209,16 +251,22 @@ pub struct Attractor {
 
 impl Attractor {
     fn matches(&self, c: &Cell) -> bool {
-        self.steady == c.steady()
-            && match (self.anchor, c.anchor) {
-                (Some(a), Some(b)) => {
-                    let d = (a[0] - b[0]).abs().max((a[1] - b[1]).abs());
-                    d <= ANCHOR_TOL * a[0].abs().max(a[1].abs()).max(1.0)
-                }
-                (None, None) => true,
-                _ => false,
-            }
+        same_attractor(&self.steady, self.anchor, c)
     }
+}
+
+/// Whether `c` reached the attractor of steady state `steady` and cycle anchor `anchor`: the
+/// same steady state and anchors within [`ANCHOR_TOL`] (relative to `max(1, |anchor|)`).
+pub(crate) fn same_attractor(steady: &Steady, anchor: Option<[f64; 2]>, c: &Cell) -> bool {
+    *steady == c.steady()
+        && match (anchor, c.anchor) {
+            (Some(a), Some(b)) => {
+                let d = (a[0] - b[0]).abs().max((a[1] - b[1]).abs());
+                d <= ANCHOR_TOL * a[0].abs().max(a[1].abs()).max(1.0)
+            }
+            (None, None) => true,
+            _ => false,
+        }
 }
 
 /// The attractors reached by `cells`, largest basin first (ties: first reached), and each
@@ -401,25 +449,37 @@ pub fn uncertainty_exponent(points: &[Uncertain]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-/// Classifies every start of `starts` on `threads` threads of `width` lanes
-/// ([`ensemble::run`]; the cells are the same for every width); each result goes with its
-/// index to `done` on the calling thread as it completes (returning an error cancels).
+/// Classifies every start of `starts` as `decision` says, on `threads` threads of `width`
+/// lanes ([`ensemble::run`]; the cells are the same for every width and number of threads);
+/// each result goes with its index to `done` on the calling thread as it completes (returning
+/// an error cancels). Returns the known periodic attractors of a recurrence decision
+/// ([`recurrence::classify_starts`]; none for [`Decision::Full`]). By recurrence the starts
+/// are taken in rounds in the order given: give them in an order that spreads over the grid
+/// early ([`crate::sweep::interleaved`]), so that the first round finds the attractors.
+#[allow(clippy::too_many_arguments)]
 pub fn classify_starts<E>(
     model: &Model,
     phase: f64,
     co: ClassifyOptions,
+    decision: Decision,
     starts: &[(f64, f64)],
     threads: Threads,
     width: Width,
     done: impl FnMut(usize, Result<Cell, SimError>) -> Result<(), E>,
-) -> Result<(), E> {
-    ensemble::run(
-        starts,
-        threads,
-        width,
-        |&(x0, v0)| CellTask::new(model, phase, x0, v0, co),
-        done,
-    )
+) -> Result<Vec<KnownAttractor>, E> {
+    match decision {
+        Decision::Full => ensemble::run(
+            starts,
+            threads,
+            width,
+            |&(x0, v0)| CellTask::new(model, phase, x0, v0, co),
+            done,
+        )
+        .map(|()| Vec::new()),
+        Decision::Recurrence(ro) => {
+            recurrence::classify_starts(model, phase, co, ro, starts, threads, width, done)
+        }
+    }
 }
 
 #[cfg(test)]
@@ -487,6 +547,7 @@ mod tests {
             anchor: None,
             at_rest: false,
             periods_simulated: 1.0,
+            decided_by: DecidedBy::Full,
         };
         let samples = [(cell(0.0), 0), (cell(0.5), 1)];
         // At x0 = 0 on a plate at 0 only x0 + ε; at 0.5 both.

@@ -42,6 +42,7 @@ pub mod parallel;
 pub mod period;
 pub mod progress;
 pub mod record;
+pub mod recurrence;
 pub mod schedule;
 pub mod seeds;
 pub mod sensitivity;

@@ -5,7 +5,7 @@
 
 mod common;
 
-use bistable_analysis::basins::{classify_starts, identify, Cell};
+use bistable_analysis::basins::{classify_starts, identify, Cell, Decision};
 use bistable_analysis::bifurcations::Kind;
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::twoparam::{trace_all, CurveOptions};
@@ -96,6 +96,7 @@ fn basins_find_both_stable_p1_orbits_inside_the_folds_hysteresis() {
         &model,
         0.0,
         ClassifyOptions::default(),
+        Decision::Full,
         &starts,
         Threads::new(2).unwrap(),
         Width::preferred(),

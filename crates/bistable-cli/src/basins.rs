@@ -11,8 +11,9 @@ use serde::Serialize;
 
 use bistable_analysis::basins::{
     classify_starts, identify, plate_at, uncertainty, uncertainty_epsilons, uncertainty_exponent,
-    uncertainty_samples, Attractor, Cell, Uncertain,
+    uncertainty_samples, Attractor, Cell, DecidedBy, Decision, Uncertain,
 };
+use bistable_analysis::recurrence::{KnownAttractor, RecurrenceOptions};
 use bistable_analysis::sensitivity::Outcome;
 use bistable_analysis::Model;
 use bistable_core::{ClassifyOptions, ResponseClass, Well};
@@ -37,6 +38,17 @@ final well and, when periodic, the section point (x, x') at plate phase 0 of
 their cycle with the smallest x (coexisting orbits of one period and class,
 e.g. low- and high-energy P-1 in well 1, differ there).
 
+Decision by recurrence (the default; --full-decision turns it off): a start stops as soon
+as --recurrence-hits (2) consecutive section points (plate phase 0) lie within
+the capture radius of the cycle points of a periodic attractor already found
+here. Each periodic attractor is found and classified once by the full decision;
+the capture radius of each of its cycle points is half the largest of 0.1, 0.05,
+..., 1e-4 (units Δx, ω0·Δx) whose ring of 16 probe starts, and every smaller
+ring, all reach it without crossing the barrier. The starts are taken in rounds
+(256, then doubling) with the attractors of the rounds before, so the cells do
+not depend on --threads or --lanes. Rest in well 2 and aperiodic motion are
+decided as in full. See docs/sensitivity.md.
+
 Uncertainty exponent (Grebogi, McDonald, Ott & Yorke 1983): a start is
 ε-uncertain when x0 ± ε reaches another attractor. The fraction f(ε) of
 uncertain starts among --uncertainty-samples grid cells is measured at ε = the
@@ -54,9 +66,10 @@ are recomputed on every run.";
 /// Shown after the options by `bistable basins --help`.
 pub const AFTER_HELP: &str = "\
 CSV (--out): x0,v0,omega,velocity,phase,zeta,restitution,class,period,chaotic,
-  final_well,anchor_x,anchor_v,at_rest_in_second_well,periods_simulated (class
-  of the start's own run; period and anchor empty when aperiodic, anchor empty at
-  rest; final_well empty for continuous interwell).
+  final_well,anchor_x,anchor_v,at_rest_in_second_well,periods_simulated,
+  decided_by (class of the start's own run; period and anchor empty when
+  aperiodic, anchor empty at rest; final_well empty for continuous interwell;
+  decided_by 'full' or 'recurrence', whose anchor is the attractor's).
 
 PNG (--plot): cells coloured by attractor; the legend lists the attractors with
 their basin fractions and the uncertainty exponent.
@@ -120,12 +133,20 @@ pub struct BasinsArgs {
     #[arg(long, value_name = "N", default_value_t = 400)]
     pub uncertainty_samples: usize,
 
+    /// Decide every start in full (no recurrence onto known attractors).
+    #[arg(long)]
+    pub full_decision: bool,
+
+    /// Consecutive section points on a known attractor that decide a start by recurrence.
+    #[arg(long, value_name = "N", default_value_t = 2)]
+    pub recurrence_hits: u32,
+
     #[command(flatten)]
     pub grid: GridArgs,
 }
 
 /// CSV header of `basins`.
-pub const COLUMNS: [&str; 15] = [
+pub const COLUMNS: [&str; 16] = [
     "x0",
     "v0",
     "omega",
@@ -141,6 +162,7 @@ pub const COLUMNS: [&str; 15] = [
     "anchor_v",
     "at_rest_in_second_well",
     "periods_simulated",
+    "decided_by",
 ];
 
 /// The CSV file of `basins`.
@@ -166,6 +188,24 @@ struct AttractorJson {
 }
 
 #[derive(Debug, Serialize)]
+struct KnownJson {
+    label: String,
+    cycle: Vec<[f64; 2]>,
+    capture_radii: Vec<f64>,
+    found_by: [f64; 2],
+}
+
+#[derive(Debug, Serialize)]
+struct RecurrenceJson {
+    hits: u32,
+    first_round: usize,
+    probe_directions: u32,
+    /// Starts computed in this run that were decided by recurrence.
+    decided_by_recurrence: usize,
+    known_attractors: Vec<KnownJson>,
+}
+
+#[derive(Debug, Serialize)]
 struct UncertainJson {
     epsilon: f64,
     samples: usize,
@@ -185,6 +225,8 @@ struct Summary {
     plate_x: f64,
     #[serde(flatten)]
     grid: GridSummary,
+    decision: &'static str,
+    recurrence: Option<RecurrenceJson>,
     attractors: Vec<AttractorJson>,
     uncertainty: Vec<UncertainJson>,
     uncertainty_exponent: Option<f64>,
@@ -238,19 +280,38 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     }
     .check()?;
     let (threads, width) = args.grid.parallel()?;
+    let decision = if args.full_decision {
+        Decision::Full
+    } else {
+        Decision::Recurrence(
+            RecurrenceOptions {
+                hits: args.recurrence_hits,
+                ..RecurrenceOptions::default()
+            }
+            .check()?,
+        )
+    };
 
     let mut run = GridRun::open(&FILE, args.grid.out.as_deref(), (xs, vs), |text, row| {
         parse_row(text, &model, phase).map_err(|e| format!("has a bad row {row}: {e}"))
     })?;
 
     let start = WallClock::now();
+    let mut known: Vec<KnownAttractor> = Vec::new();
+    let mut captured = 0usize;
     let done = run.compute(
         format!("basins: {} starts", run.todo.len()),
         |c, cell| c.row(&row(cell, &model, phase)),
         |todo, done| {
-            classify_starts(&model, phase, co, todo, threads, width, |i, r| {
+            known = classify_starts(&model, phase, co, decision, todo, threads, width, |i, r| {
+                if r.as_ref()
+                    .is_ok_and(|c| c.decided_by == DecidedBy::Recurrence)
+                {
+                    captured += 1;
+                }
                 done(i, r.map_err(CliError::from))
-            })
+            })?;
+            Ok(())
         },
     )?;
 
@@ -299,6 +360,33 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
         v_range: vs.to_string(),
         plate_x,
         grid: run.summary(&done, (threads, width), wall),
+        decision: match decision {
+            Decision::Full => "full",
+            Decision::Recurrence(_) => "recurrence",
+        },
+        recurrence: match decision {
+            Decision::Full => None,
+            Decision::Recurrence(ro) => Some(RecurrenceJson {
+                hits: ro.hits,
+                first_round: ro.first_round,
+                probe_directions: ro.directions,
+                decided_by_recurrence: captured,
+                known_attractors: known
+                    .iter()
+                    .map(|k| KnownJson {
+                        label: format!(
+                            "{} (x = {:.4}, x' = {:.4})",
+                            k.steady.label(),
+                            k.anchor[0],
+                            k.anchor[1]
+                        ),
+                        cycle: k.cycle.clone(),
+                        capture_radii: k.radii.clone(),
+                        found_by: [k.found_by.0, k.found_by.1],
+                    })
+                    .collect(),
+            }),
+        },
         attractors: attractors
             .iter()
             .enumerate()
@@ -342,7 +430,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     run.check(&done, "starts")
 }
 
-fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
+fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 16] {
     let o = &c.outcome;
     [
         Field::F(c.x0),
@@ -361,6 +449,7 @@ fn row<'a>(c: &Cell, m: &Model, phase: f64) -> [Field<'a>; 15] {
         c.anchor.map_or(Field::Empty, |a| Field::F(a[1])),
         Field::flag(c.at_rest),
         Field::F(c.periods_simulated),
+        Field::S(c.decided_by.name()),
     ]
 }
 
@@ -424,6 +513,11 @@ fn parse_row(text: &str, model: &Model, phase: f64) -> Result<Cell, String> {
         anchor,
         at_rest: f[13] == "true",
         periods_simulated: num(14)?,
+        decided_by: match f[15] {
+            "full" => DecidedBy::Full,
+            "recurrence" => DecidedBy::Recurrence,
+            other => return Err(format!("bad decided_by '{other}'")),
+        },
     })
 }
 
@@ -442,6 +536,14 @@ fn human(s: &Summary) -> String {
         s.grid.wall_time_s,
         s.grid.threads
     );
+    if let Some(r) = &s.recurrence {
+        t.push_str(&format!(
+            "  decided by recurrence: {} of {} starts computed ({} known periodic attractors)\n",
+            r.decided_by_recurrence,
+            s.grid.computed,
+            r.known_attractors.len()
+        ));
+    }
     for a in s.attractors.iter().take(20) {
         t.push_str(&format!(
             "  #{:<2} {:>6.2}%  {}\n",

@@ -150,6 +150,7 @@ impl From<ParamError> for CliError {
             "horizon" => "--horizon",
             "repeat_periods" => "--repeat-periods",
             "lyapunov_windows" => "--lyapunov-windows",
+            "recurrence_hits" => "--recurrence-hits",
             other => return CliError::invalid(other, e.value, e.rule),
         };
         CliError::invalid(option, e.value, e.rule)

@@ -491,6 +491,79 @@ fn basins_find_coexisting_attractors_and_resume() {
     ]);
     assert_eq!(o.status.code(), Some(2));
     assert!(stderr(&o).contains("--phase"), "{}", stderr(&o));
+    let o = bistable(&[
+        "basins",
+        "--omega",
+        "1.45",
+        "--velocity",
+        "0.05",
+        "--x-range",
+        "0:1:4",
+        "--recurrence-hits",
+        "0",
+        "--plot",
+        "x.png",
+    ]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("--recurrence-hits"), "{}", stderr(&o));
+}
+
+#[test]
+fn basins_by_recurrence_label_cells_as_the_full_decision() {
+    // The default decides by recurrence (docs/sensitivity.md), --full-decision every start in
+    // full: on this 30 × 30 grid the same cells but for the columns that tell how.
+    let dir = scratch("basins_rec");
+    let mut rows = Vec::new();
+    for extra in [None, Some("--full-decision")] {
+        let csv = dir.join(format!("{}.csv", extra.is_some()));
+        let _ = std::fs::remove_file(&csv);
+        let mut a = vec![
+            "basins",
+            "--omega",
+            "1.45",
+            "--velocity",
+            "0.05",
+            "--x-range",
+            "0:1.2:30",
+            "--v-range",
+            "-0.6:0.6:30",
+            "--uncertainty-samples",
+            "0",
+            "--out",
+            s(&csv),
+            "--json",
+        ];
+        a.extend(extra);
+        let b = json(&a);
+        let captured = b["recurrence"]["decided_by_recurrence"].as_u64();
+        match extra {
+            None => {
+                assert_eq!(b["decision"], "recurrence");
+                assert!(captured.is_some_and(|n| n > 0), "{b}");
+            }
+            Some(_) => {
+                assert_eq!(b["decision"], "full");
+                assert!(b["recurrence"].is_null());
+            }
+        }
+        rows.push(csv_rows(&csv));
+    }
+    let key = |r: &std::collections::HashMap<String, String>| (r["x0"].clone(), r["v0"].clone());
+    let full: std::collections::HashMap<_, _> = rows[1].iter().map(|r| (key(r), r)).collect();
+    assert_eq!(rows[0].len(), 900);
+    for r in &rows[0] {
+        let f = full[&key(r)];
+        for c in [
+            "class",
+            "period",
+            "chaotic",
+            "final_well",
+            "at_rest_in_second_well",
+        ] {
+            assert_eq!(r[c], f[c], "{c} at {:?}", key(r));
+        }
+        assert_eq!(f["decided_by"], "full");
+    }
 }
 
 #[test]

@@ -283,6 +283,12 @@ impl ClassifyRun {
         Ok((run, sim))
     }
 
+    /// Whether the run is still at its stroboscopic sections (the class not yet decided): the
+    /// next [`ClassifyRun::target`] is then the next section, at plate phase 0.
+    pub fn at_sections(&self) -> bool {
+        matches!(self.stage, Stage::Sections)
+    }
+
     /// The instant to advance the simulator to next.
     pub fn target(&self) -> Instant {
         match &self.stage {

@@ -6,9 +6,12 @@ use pyo3::types::{PyDict, PyList};
 
 use bistable_analysis::basins::{
     classify_starts, count_uncertain, identify, plate_at, uncertainty_epsilons,
-    uncertainty_exponent, uncertainty_samples, uncertainty_starts, Attractor, Cell,
+    uncertainty_exponent, uncertainty_samples, uncertainty_starts, Attractor, Cell, DecidedBy,
+    Decision,
 };
+use bistable_analysis::recurrence::RecurrenceOptions;
 use bistable_analysis::sensitivity::Outcome;
+use bistable_analysis::sweep::interleaved;
 use bistable_core::{ClassifyOptions, ResponseClass, SimError, Well};
 
 use crate::common::{
@@ -29,16 +32,21 @@ fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
     d.set_item("anchor_v", c.anchor.map(|a| a[1]))?;
     d.set_item("at_rest_in_second_well", c.at_rest)?;
     d.set_item("periods_simulated", c.periods_simulated)?;
+    d.set_item("decided_by", c.decided_by.name())?;
     Ok(d)
 }
 
 /// Classifies the starts `(x0, v0)` at plate phase `phase` (cycles) on `threads` threads (0:
-/// all cores) of `lanes` trajectories each in SIMD lanes (1, 4 or 8); one dict per start, in order (the `bistable basins` CSV columns without the
-/// model's). With `check_only` only the arguments and the starts are checked (an empty list).
+/// all cores) of `lanes` trajectories each in SIMD lanes (1, 4 or 8); one dict per start, in
+/// order (the `bistable basins` CSV columns without the model's). By recurrence onto known
+/// periodic attractors (`bistable_analysis::recurrence`, `recurrence_hits` consecutive section
+/// points), the starts taken in rounds in the interleaved order of the list (as `bistable
+/// basins` takes its grid); every start in full with `full_decision`. With `check_only` only the
+/// arguments and the starts are checked (an empty list).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, phase, starts, zeta=0.02, restitution=0.85, tol=1e-16,
     chatter="accumulation", max_periods=2000.0, lyapunov_periods=300, threads=0, lanes=4,
-    check_only=false))]
+    full_decision=false, recurrence_hits=2, check_only=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn basin_cells<'py>(
     py: Python<'py>,
@@ -54,6 +62,8 @@ pub fn basin_cells<'py>(
     lyapunov_periods: u32,
     threads: usize,
     lanes: usize,
+    full_decision: bool,
+    recurrence_hits: u32,
     check_only: bool,
 ) -> PyResult<Bound<'py, PyList>> {
     let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
@@ -75,19 +85,34 @@ pub fn basin_cells<'py>(
     }
     .check()
     .map_err(|e| param_err(py, &e))?;
+    let ro = RecurrenceOptions {
+        hits: recurrence_hits,
+        ..RecurrenceOptions::default()
+    }
+    .check()
+    .map_err(|e| param_err(py, &e))?;
+    let decision = if full_decision {
+        Decision::Full
+    } else {
+        Decision::Recurrence(ro)
+    };
     let threads = threads_arg(threads)?;
     let width = lanes_arg(lanes)?;
     if check_only {
         return Ok(PyList::empty(py));
     }
+    // The rounds of a recurrence decision follow the list: spread them over the grid early.
+    let order: Vec<usize> = interleaved(starts.len()).collect();
+    let ordered: Vec<(f64, f64)> = order.iter().map(|&k| starts[k]).collect();
     let mut slots: Vec<Option<Result<Cell, SimError>>> = vec![None; starts.len()];
     released(
         py,
         || {
-            classify_starts(&m, phase, co, &starts, threads, width, |i, r| {
-                slots[i] = Some(r);
+            classify_starts(&m, phase, co, decision, &ordered, threads, width, |i, r| {
+                slots[order[i]] = Some(r);
                 check_signals()
             })
+            .map(|_| ())
         },
         |e| e.into_py(py),
     )?;
@@ -151,6 +176,15 @@ fn cell_from(d: &Bound<'_, PyDict>) -> PyResult<Cell> {
         anchor: ax.zip(av).map(|(a, b)| [a, b]),
         at_rest: get("at_rest_in_second_well")?.extract()?,
         periods_simulated: get("periods_simulated")?.extract()?,
+        decided_by: match get("decided_by")?.extract::<String>()?.as_str() {
+            "full" => DecidedBy::Full,
+            "recurrence" => DecidedBy::Recurrence,
+            other => {
+                return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                    "bad decided_by {other:?}"
+                )))
+            }
+        },
     })
 }
 

@@ -20,6 +20,7 @@ CELL_COLUMNS = (
     "anchor_v",
     "at_rest_in_second_well",
     "periods_simulated",
+    "decided_by",
 )
 
 
@@ -92,10 +93,19 @@ def basins(
     chatter: str = "accumulation",
     max_periods: float = 2000.0,
     lyapunov_periods: int = 300,
+    full_decision: bool = False,
+    recurrence_hits: int = 2,
 ):
     """Classifies every start of the grid ``x0 × v0`` at plate phase ``phase`` (cycles) for the
     shaker point ``(omega, velocity)``, as ``bistable basins`` does, and groups the starts by
     the attractor they reach.
+
+    By default a start stops once ``recurrence_hits`` consecutive section points lie within
+    the probed capture radius of a periodic attractor already found (``decided_by`` is then
+    ``'recurrence'``; see ``docs/sensitivity.md``); ``full_decision=True`` decides every start
+    in full. The starts are taken in rounds in the CLI's interleaved grid order, so the cells
+    are those of ``bistable basins`` for the same grid; with a Dask ``client`` each task makes
+    its own rounds (the same labels up to the measured agreement, other ``periods_simulated``).
 
     Returns ``(cells, attractors)``: a pandas DataFrame of the cells (:data:`CELL_COLUMNS` and
     ``attractor``, the attractor's number from 1), ordered with ``v0`` outer and ``x0`` inner as
@@ -120,6 +130,8 @@ def basins(
         omega, velocity, phase, client, chunk, threads, lanes, zeta, restitution, tol, chatter,
         max_periods, lyapunov_periods,
     )  # fmt: skip
+    options["full_decision"] = full_decision
+    options["recurrence_hits"] = check.integer("recurrence_hits", recurrence_hits, 1, 1000)
     xs, vs = check.reals("x0", x0), check.reals("v0", v0)
     check.grid(("x0", "v0"), xs, vs)
     starts = [(a, b) for b in vs for a in xs]
@@ -201,7 +213,8 @@ def basin_uncertainty(
         nx=len(xs),
     )
     starts = _native.basin_uncertainty_starts(grid)
-    reached = _classify_starts(*shaker, starts, options, *where)
+    # The displaced starts are decided in full, as by `bistable basins`.
+    reached = _classify_starts(*shaker, starts, dict(options, full_decision=True), *where)
     fractions, alpha = _native.basin_uncertainty(grid, reached)
     columns = ["epsilon", "samples", "uncertain", "fraction"]
     return pd.DataFrame.from_records(fractions, columns=columns), alpha

@@ -1,0 +1,164 @@
+//! Issue 37: basins decided by recurrence (`bistable_analysis::recurrence`) against the full
+//! decision of every start, on small grids at two points with coexisting attractors: the same
+//! attractors, the same cell outcome (class, period, chaos, final well, at rest) and attractor
+//! in at least 99.9 % of the cells, and the same cells for every thread count and lane width.
+
+use bistable_analysis::basins::{classify_starts, identify, Attractor, Cell, DecidedBy, Decision};
+use bistable_analysis::parallel::Threads;
+use bistable_analysis::recurrence::{KnownAttractor, RecurrenceOptions};
+use bistable_analysis::sweep::interleaved;
+use bistable_analysis::Model;
+use bistable_core::{ClassifyOptions, Params, SimError, Sinusoid, SolverOptions, Width};
+
+/// Agreement required between the two decisions, as the issue asks on the large grids.
+const AGREEMENT: f64 = 0.999;
+
+/// `bistable basins`'s classification settings.
+fn options() -> ClassifyOptions {
+    ClassifyOptions {
+        max_natural_periods: 2_000.0,
+        lyapunov_periods: 300,
+        ..ClassifyOptions::default()
+    }
+}
+
+/// The `n × n` grid over x0 ∈ [0, 1.2], x0' ∈ [−0.6, 0.6] in the CLI's interleaved order.
+fn grid(n: usize) -> Vec<(f64, f64)> {
+    let step = 1.2 / (n - 1) as f64;
+    interleaved(n * n)
+        .map(|k| ((k % n) as f64 * step, -0.6 + (k / n) as f64 * step))
+        .collect()
+}
+
+fn cells(
+    model: &Model,
+    decision: Decision,
+    starts: &[(f64, f64)],
+    threads: usize,
+    width: Width,
+) -> (Vec<Cell>, Vec<KnownAttractor>) {
+    let mut out: Vec<Option<Cell>> = vec![None; starts.len()];
+    let known = classify_starts::<SimError>(
+        model,
+        0.0,
+        options(),
+        decision,
+        starts,
+        Threads::new(threads).unwrap(),
+        width,
+        |i, r| {
+            out[i] = Some(r?);
+            Ok(())
+        },
+    )
+    .unwrap();
+    (out.into_iter().map(Option::unwrap).collect(), known)
+}
+
+/// The attractors without their basin sizes, for comparing two grids' sets.
+fn set(attractors: &[Attractor]) -> Vec<Attractor> {
+    let mut s: Vec<Attractor> = attractors
+        .iter()
+        .map(|a| Attractor { cells: 0, ..*a })
+        .collect();
+    s.sort_by_key(|a| a.steady.label());
+    s
+}
+
+fn compare(omega: f64, velocity: f64, n: usize) {
+    let model = Model::new(
+        Params::paper(),
+        Sinusoid::new(omega, velocity).unwrap(),
+        SolverOptions::default(),
+    );
+    let starts = grid(n);
+    let rec = Decision::Recurrence(RecurrenceOptions::default());
+    let (full, none) = cells(&model, Decision::Full, &starts, 2, Width::Four);
+    assert!(none.is_empty());
+    let (fast, known) = cells(&model, rec, &starts, 2, Width::Four);
+
+    // The same attractors (steady state and cycle anchor within the grouping tolerance).
+    let (a_full, i_full) = identify(&full);
+    let (a_fast, i_fast) = identify(&fast);
+    let (s_full, s_fast) = (set(&a_full), set(&a_fast));
+    assert_eq!(s_full.len(), s_fast.len(), "{a_full:?}\n{a_fast:?}");
+    for (a, b) in s_full.iter().zip(&s_fast) {
+        assert_eq!(a.steady, b.steady);
+        let (x, y) = (a.anchor.unwrap_or_default(), b.anchor.unwrap_or_default());
+        assert!(
+            (x[0] - y[0]).abs().max((x[1] - y[1]).abs()) < 1e-5,
+            "{a:?} {b:?}"
+        );
+    }
+    // Every periodic attractor other than rest is known, each with a capture radius.
+    let periodic = a_full.iter().filter(|a| a.anchor.is_some()).count();
+    assert_eq!(known.len(), periodic, "{known:?}");
+    assert!(known.iter().all(|k| k.radii.iter().any(|&r| r > 0.0)));
+
+    // The same outcome and attractor per cell, but for at most 0.1 %.
+    let label = |a: &[Attractor], i: usize| {
+        a[i].steady.label() + &format!("{:?}", a[i].anchor.map(|x| (x[0] * 1e4).round()))
+    };
+    let differ: Vec<usize> = (0..starts.len())
+        .filter(|&k| {
+            full[k].outcome != fast[k].outcome
+                || full[k].at_rest != fast[k].at_rest
+                || label(&a_full, i_full[k]) != label(&a_fast, i_fast[k])
+        })
+        .collect();
+    let captured = fast
+        .iter()
+        .filter(|c| c.decided_by == DecidedBy::Recurrence)
+        .count();
+    let periods = |c: &[Cell]| c.iter().map(|c| c.periods_simulated).sum::<f64>();
+    eprintln!(
+        "({omega}, {velocity}) {n} × {n}: {} cells differ, {captured} captured, natural periods \
+         {:.0} against {:.0} in full",
+        differ.len(),
+        periods(&fast),
+        periods(&full)
+    );
+    for &k in &differ {
+        eprintln!("  {:?}: {:?} / {:?}", starts[k], full[k], fast[k]);
+    }
+    assert!(
+        (differ.len() as f64) <= (1.0 - AGREEMENT) * starts.len() as f64,
+        "{} of {} cells differ",
+        differ.len(),
+        starts.len()
+    );
+    // Recurrence decided most periodic cells and shortened the runs.
+    assert!(captured > 0 && periods(&fast) < 0.6 * periods(&full));
+
+    // The same cells whatever the threads and lanes (the rounds fix the known attractors).
+    let (alone, known1) = cells(&model, rec, &starts, 1, Width::One);
+    assert_eq!(alone, fast);
+    assert_eq!(known1, known);
+}
+
+#[test]
+fn recurrence_agrees_with_the_full_decision_at_1_45_0_05() {
+    // Rest in well 2, P-1 and P-4 in well 1, fractal boundaries.
+    compare(1.45, 0.05, 60);
+}
+
+#[test]
+fn recurrence_agrees_with_the_full_decision_at_1_75_0_07() {
+    // Rest in well 2, P-1 and P-3 in well 1, P-6 across the barrier.
+    compare(1.75, 0.07, 50);
+}
+
+#[test]
+fn bad_recurrence_options_are_named() {
+    let bad = RecurrenceOptions {
+        hits: 0,
+        ..RecurrenceOptions::default()
+    };
+    assert_eq!(bad.check().unwrap_err().name, "recurrence_hits");
+    let bad = RecurrenceOptions {
+        directions: 2,
+        ..RecurrenceOptions::default()
+    };
+    assert_eq!(bad.check().unwrap_err().name, "probe_directions");
+    assert!(RecurrenceOptions::default().check().is_ok());
+}
