@@ -176,14 +176,18 @@ fn cell_from(d: &Bound<'_, PyDict>) -> PyResult<Cell> {
         anchor: ax.zip(av).map(|(a, b)| [a, b]),
         at_rest: get("at_rest_in_second_well")?.extract()?,
         periods_simulated: get("periods_simulated")?.extract()?,
-        decided_by: match get("decided_by")?.extract::<String>()?.as_str() {
-            "full" => DecidedBy::Full,
-            "recurrence" => DecidedBy::Recurrence,
-            other => {
-                return Err(pyo3::exceptions::PyValueError::new_err(format!(
-                    "bad decided_by {other:?}"
-                )))
-            }
+        // How the cell was decided, not what it reached: `full` when not given.
+        decided_by: match d.get_item("decided_by")? {
+            None => DecidedBy::Full,
+            Some(v) => match v.extract::<String>()?.as_str() {
+                "full" => DecidedBy::Full,
+                "recurrence" => DecidedBy::Recurrence,
+                other => {
+                    return Err(pyo3::exceptions::PyValueError::new_err(format!(
+                        "bad decided_by {other:?}"
+                    )))
+                }
+            },
         },
     })
 }

@@ -190,16 +190,18 @@ def basin_uncertainty(
     )  # fmt: skip
     samples = check.integer("samples", samples, 0, check.MAX_POINTS)
     xs = check.reals("x0", x0)
-    if not (hasattr(cells, "columns") and set(CELL_COLUMNS) <= set(cells.columns)):
+    # `decided_by` says how a cell was decided, not what it reached: not needed here.
+    needed = [c for c in CELL_COLUMNS if c != "decided_by"]
+    if not (hasattr(cells, "columns") and set(needed) <= set(cells.columns)):
         raise check.invalid(
             "cells",
             type(cells).__name__,
-            f"must be the cells DataFrame of basins() (columns {', '.join(CELL_COLUMNS)})",
+            f"must be the cells DataFrame of basins() (columns {', '.join(needed)})",
         )
     model = {k: options[k] for k in ("zeta", "restitution", "tol", "chatter")}
     records = [
         {k: (None if pd.isna(v) else v.item() if hasattr(v, "item") else v) for k, v in r.items()}
-        for r in cells[list(CELL_COLUMNS)].to_dict("records")
+        for r in cells[needed].to_dict("records")
     ]
     grid = dict(
         model,
