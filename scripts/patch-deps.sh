@@ -42,14 +42,17 @@ patch_crate() { # name version sha256 patch-file...
 # payload, not a slice of the whole receive buffer; a writer tells how many readers are matched
 # and how many of its samples are not acknowledged yet; a GAP for a new reader spares what the
 # other readers of its receiving process still miss (Cyclone DDS applies it to all of them); a
-# discovery writer sends a new Fast DDS reader its samples in order, live only once it is in sync.
+# discovery writer sends a new Fast DDS reader its samples in order, live only once it is in sync;
+# a reader joining next to another reader of its Cyclone DDS process is offered its history from
+# what that reader had acknowledged shortly before.
 patch_crate rustdds 0.15.1 42683a88b9dc025d7d45771b88d20846443b4901ec4b045ca78b8dd316ab616f \
   ros/patches/rustdds-0.15.1-irrelevant-undecodable-data.patch \
   ros/patches/rustdds-0.15.1-transient-local-history.patch \
   ros/patches/rustdds-0.15.1-own-received-payloads.patch \
   ros/patches/rustdds-0.15.1-writer-status.patch \
   ros/patches/rustdds-0.15.1-gaps-for-shared-readers.patch \
-  ros/patches/rustdds-0.15.1-builtin-live-in-sync.patch
+  ros/patches/rustdds-0.15.1-builtin-live-in-sync.patch \
+  ros/patches/rustdds-0.15.1-late-reader-history.patch
 
 # ros2-client: a Publisher waits for the acknowledgements of what it published (the node's
 # shutdown), tells how many are missing and how many subscriptions are matched.
