@@ -107,7 +107,7 @@ pub struct BasinsArgs {
     #[arg(
         long,
         value_name = "A:B:N",
-        default_value = "-0.3:0.5:100",
+        default_value = "0:1.2:100",
         allow_hyphen_values = true
     )]
     pub x_range: Range,

@@ -1406,3 +1406,28 @@ fn atlas_plot_over_a_map_and_the_p1_p2_check() {
         assert!(stderr(&o).contains(what), "{args:?}: {}", stderr(&o));
     }
 }
+
+/// The default box of starts is a valid one (x0 from 0, on the plate at phase 0, up).
+#[test]
+fn basins_default_x_range_is_accepted() {
+    let dir = scratch("basins_default");
+    let csv = dir.join("basins.csv");
+    let o = bistable(&[
+        "basins",
+        "--omega",
+        "1.45",
+        "--velocity",
+        "0.05",
+        "--v-range",
+        "0:0:1",
+        "--uncertainty-samples",
+        "0",
+        "--out",
+        csv.to_str().unwrap(),
+        "--json",
+    ]);
+    assert!(o.status.success(), "{}", stderr(&o));
+    let v: Value = serde_json::from_slice(&o.stdout).unwrap();
+    assert_eq!(v["x_range"], "0:1.2:100");
+    assert_eq!(v["points"], 100);
+}
