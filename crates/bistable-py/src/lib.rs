@@ -48,6 +48,7 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     bistable_core::simd::check()
         .map_err(|e| pyo3::exceptions::PyImportError::new_err(e.to_string()))?;
     m.add_function(wrap_pyfunction!(simulate::simulate, m)?)?;
+    m.add_function(wrap_pyfunction!(orbit::kind_names, m)?)?;
     m.add_class::<simulate::PySimulator>()?;
     m.add_function(wrap_pyfunction!(classify::classify, m)?)?;
     m.add_function(wrap_pyfunction!(classify::classify_many, m)?)?;

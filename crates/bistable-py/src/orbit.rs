@@ -582,3 +582,20 @@ pub(crate) fn atlas<'py>(
     out.set_item("points", table(py, point_rows(&all, &points))?)?;
     Ok(out)
 }
+
+/// The words for the `kind` codes of the bifurcation and codimension-two point tables, in code
+/// order: `{"bifurcation": [...], "point": [...]}` (`Kind::ALL`, `PointKind::ALL`), so that
+/// Python names the codes from the Rust enums, not from a copy.
+#[pyfunction]
+pub fn kind_names(py: Python<'_>) -> PyResult<Bound<'_, PyDict>> {
+    let d = PyDict::new(py);
+    d.set_item(
+        "bifurcation",
+        Kind::ALL.iter().map(|k| k.name()).collect::<Vec<_>>(),
+    )?;
+    d.set_item(
+        "point",
+        PointKind::ALL.iter().map(|k| k.name()).collect::<Vec<_>>(),
+    )?;
+    Ok(d)
+}

@@ -53,12 +53,10 @@ ATLAS_POINT_COLUMNS = (
 )  # fmt: skip
 
 #: ``kind`` of the codimension-two points, by the code the native module uses.
-_POINT_KINDS = np.array(["fold_flip", "cusp", "resonant_grazing", "crossing"], dtype=object)
+_POINT_KINDS = np.array(_native.kind_names()["point"], dtype=object)
 
 #: ``kind`` of the bifurcation points, by the code the native module uses.
-_BIFURCATION_KINDS = np.array(
-    ["fold", "period_doubling", "neimark_sacker", "grazing", "sticking"], dtype=object
-)
+_BIFURCATION_KINDS = np.array(_native.kind_names()["bifurcation"], dtype=object)
 
 
 def _bifurcations_frame(raw: Dict[str, Any]):
