@@ -1,35 +1,15 @@
 //! The FMU through its C functions, called from Rust: results against the core, step-size
 //! independence, SI scaling, external inputs, FMU states, threads, and refused calls.
 
-use std::ffi::{c_char, c_void, CStr, CString};
-use std::sync::Mutex;
+mod common;
+
+use std::ffi::CString;
 
 use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
 use bistable_impact::exports::*;
 use bistable_impact::fmi2::*;
 use bistable_impact::md::{var, GUID, VARS};
-
-/// Messages logged by one instance: `(status, category, message)`.
-type Log = Mutex<Vec<(fmi2Status, String, String)>>;
-
-/// A logger with the fixed arguments of the variadic FMI logger plus the one `%s` argument.
-/// x86-64 and AArch64 Linux pass these in the same registers whether or not the callee is
-/// variadic; the C host tests a real variadic logger.
-unsafe extern "C" fn record(
-    env: fmi2ComponentEnvironment,
-    _name: fmi2String,
-    status: fmi2Status,
-    category: fmi2String,
-    format: fmi2String,
-    msg: *const c_char,
-) {
-    let log = &*(env as *const Log);
-    assert_eq!(CStr::from_ptr(format).to_str().unwrap(), "%s");
-    let text = |p| CStr::from_ptr(p).to_string_lossy().into_owned();
-    log.lock()
-        .unwrap()
-        .push((status, text(category), text(msg)));
-}
+use common::Log;
 
 fn vr(index: usize) -> fmi2ValueReference {
     VARS[index].vr
@@ -44,44 +24,12 @@ struct Fmu {
 }
 
 impl Fmu {
-    fn with_guid(
-        guid: &str,
-        kind: fmi2Type,
-    ) -> (fmi2Component, Box<Log>, Box<fmi2CallbackFunctions>) {
-        let log: Box<Log> = Box::default();
-        // SAFETY: the logger's leading arguments match; see `record`.
-        let logger: fmi2CallbackLogger = unsafe {
-            std::mem::transmute::<*const c_void, fmi2CallbackLogger>(record as *const c_void)
-        };
-        let callbacks = Box::new(fmi2CallbackFunctions {
-            logger,
-            allocateMemory: None,
-            freeMemory: None,
-            stepFinished: None,
-            componentEnvironment: &*log as *const Log as *mut c_void,
-        });
-        let name = CString::new("test").unwrap();
-        let guid = CString::new(guid).unwrap();
-        let c = unsafe {
-            fmi2Instantiate(
-                name.as_ptr(),
-                kind,
-                guid.as_ptr(),
-                std::ptr::null(),
-                &*callbacks,
-                fmi2False,
-                fmi2True,
-            )
-        };
-        (c, log, callbacks)
-    }
-
     fn new() -> Self {
         Self::of(fmi2CoSimulation)
     }
 
     fn of(kind: fmi2Type) -> Self {
-        let (c, log, callbacks) = Self::with_guid(GUID, kind);
+        let (c, log, callbacks) = common::instantiate(GUID, kind);
         assert!(!c.is_null());
         Fmu {
             c,
@@ -456,10 +404,11 @@ fn tunable_shaker_change_keeps_the_plate_continuous() {
 
 #[test]
 fn illegal_calls_and_bad_values_are_refused_with_a_reason() {
-    let (c, log, _cb) = Fmu::with_guid("{00000000-0000-0000-0000-000000000000}", fmi2CoSimulation);
+    let (c, log, _cb) =
+        common::instantiate("{00000000-0000-0000-0000-000000000000}", fmi2CoSimulation);
     assert!(c.is_null());
     assert!(log.lock().unwrap()[0].2.contains("does not match"));
-    let (c, log, _cb) = Fmu::with_guid(GUID, 7);
+    let (c, log, _cb) = common::instantiate(GUID, 7);
     assert!(c.is_null());
     assert!(log.lock().unwrap()[0]
         .2
