@@ -4,7 +4,7 @@ mod node;
 
 use std::process::ExitCode;
 
-use bistable_impact_node::args::{self, Parsed};
+use bistable_impact_node::args::{self, DiscoveryRange, Parsed};
 use bistable_impact_node::params::{Change, Settings, SPECS};
 
 fn main() -> ExitCode {
@@ -16,16 +16,7 @@ fn main() -> ExitCode {
             print_help();
             ExitCode::SUCCESS
         }
-        Ok(Parsed::Run(cfg)) => match bistable_core::simd::check()
-            .map_err(|e| e.to_string())
-            .and_then(|_| {
-                args::discovery_range(
-                    std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
-                        .ok()
-                        .as_deref(),
-                    std::env::var("ROS_LOCALHOST_ONLY").ok().as_deref(),
-                )
-            })
+        Ok(Parsed::Run(cfg)) => match environment()
             .map_err(|e| (e, ExitCode::from(2)))
             .and_then(|range| node::run::run(*cfg, range).map_err(|e| (e, ExitCode::FAILURE)))
         {
@@ -40,6 +31,18 @@ fn main() -> ExitCode {
             ExitCode::from(2)
         }
     }
+}
+
+/// What the environment settles before the node starts (a refusal is exit status 2): the
+/// simulator's SIMD path (`BISTABLE_SIMD`) and the discovery range.
+fn environment() -> Result<DiscoveryRange, String> {
+    bistable_core::simd::check().map_err(|e| e.to_string())?;
+    args::discovery_range(
+        std::env::var("ROS_AUTOMATIC_DISCOVERY_RANGE")
+            .ok()
+            .as_deref(),
+        std::env::var("ROS_LOCALHOST_ONLY").ok().as_deref(),
+    )
 }
 
 /// `--help`: the usage, then every parameter with its unit, kind and default.
