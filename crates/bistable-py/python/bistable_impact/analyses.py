@@ -52,11 +52,13 @@ ATLAS_POINT_COLUMNS = (
     "impacts", "impacts_beyond", "error",
 )  # fmt: skip
 
+_KIND_NAMES = _native.kind_names()
+
 #: ``kind`` of the codimension-two points, by the code the native module uses.
-_POINT_KINDS = np.array(_native.kind_names()["point"], dtype=object)
+_POINT_KINDS = np.array(_KIND_NAMES["point"], dtype=object)
 
 #: ``kind`` of the bifurcation points, by the code the native module uses.
-_BIFURCATION_KINDS = np.array(_native.kind_names()["bifurcation"], dtype=object)
+_BIFURCATION_KINDS = np.array(_KIND_NAMES["bifurcation"], dtype=object)
 
 
 def _bifurcations_frame(raw: Dict[str, Any]):
