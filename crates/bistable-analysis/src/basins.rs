@@ -30,7 +30,7 @@ use bistable_core::{
 
 use crate::ensemble::{self, run_alone, Run, Task};
 use crate::parallel::Threads;
-use crate::recurrence::{self, KnownAttractor, RecurrenceOptions};
+use crate::recurrence::{self, Known, RecurrenceOptions};
 use crate::sensitivity::Outcome;
 use crate::Model;
 
@@ -452,7 +452,7 @@ pub fn uncertainty_exponent(points: &[Uncertain]) -> Option<f64> {
 /// Classifies every start of `starts` as `decision` says, on `threads` threads of `width`
 /// lanes ([`ensemble::run`]; the cells are the same for every width and number of threads);
 /// each result goes with its index to `done` on the calling thread as it completes (returning
-/// an error cancels). Returns the known periodic attractors of a recurrence decision
+/// an error cancels). Returns the known attractors of a recurrence decision
 /// ([`recurrence::classify_starts`]; none for [`Decision::Full`]). By recurrence the starts
 /// are taken in rounds in the order given: give them in an order that spreads over the grid
 /// early ([`crate::sweep::interleaved`]), so that the first round finds the attractors.
@@ -466,7 +466,7 @@ pub fn classify_starts<E>(
     threads: Threads,
     width: Width,
     done: impl FnMut(usize, Result<Cell, SimError>) -> Result<(), E>,
-) -> Result<Vec<KnownAttractor>, E> {
+) -> Result<Known, E> {
     match decision {
         Decision::Full => ensemble::run(
             starts,
@@ -475,7 +475,7 @@ pub fn classify_starts<E>(
             |&(x0, v0)| CellTask::new(model, phase, x0, v0, co),
             done,
         )
-        .map(|()| Vec::new()),
+        .map(|()| Known::default()),
         Decision::Recurrence(ro) => {
             recurrence::classify_starts(model, phase, co, ro, starts, threads, width, done)
         }

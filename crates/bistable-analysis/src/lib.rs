@@ -29,6 +29,7 @@ pub mod bifurcation;
 pub mod bifurcations;
 pub mod branches;
 pub mod codim2;
+pub mod coexistence;
 pub mod continuation;
 pub mod cycles;
 pub mod energy;

@@ -13,14 +13,15 @@ use bistable_analysis::basins::{
     classify_starts, identify, plate_at, uncertainty, uncertainty_epsilons, uncertainty_exponent,
     uncertainty_samples, Attractor, Cell, DecidedBy, Decision, Uncertain,
 };
-use bistable_analysis::recurrence::{KnownAttractor, RecurrenceOptions};
+use bistable_analysis::recurrence::{Known, RecurrenceOptions};
 use bistable_analysis::sensitivity::Outcome;
 use bistable_analysis::Model;
 use bistable_core::{ClassifyOptions, ResponseClass, Well};
 
 use crate::common::CommonArgs;
+use crate::decision::DecisionArgs;
 use crate::error::CliError;
-use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary};
+use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary, Rows};
 use crate::output::{print_json, print_text, Field};
 use crate::plot::{self, header, Area, DrawResult, FONT};
 use crate::progress::Progress;
@@ -41,13 +42,16 @@ e.g. low- and high-energy P-1 in well 1, differ there).
 Decision by recurrence (the default; --full-decision turns it off): a start stops as soon
 as --recurrence-hits (2) consecutive section points (plate phase 0) lie within
 the capture radius of the cycle points of a periodic attractor already found
-here. Each periodic attractor is found and classified once by the full decision;
-the capture radius of each of its cycle points is half the largest of 0.1, 0.05,
-..., 1e-4 (units Δx, ω0·Δx) whose ring of 16 probe starts, and every smaller
-ring, all reach it without crossing the barrier. The starts are taken in rounds
-(256, then doubling) with the attractors of the rounds before, so the cells do
-not depend on --threads or --lanes. Rest in well 2 and aperiodic motion are
-decided as in full. See docs/sensitivity.md.
+here, or --aperiodic-hits (20) consecutive section points lie in the cells
+(side 0.01) of an aperiodic (chaotic) attractor already found here. Each
+attractor is found and classified once by the full decision; the capture radius
+of each cycle point is half the largest of 0.1, 0.05, ..., 1e-4 (units Δx,
+ω0·Δx) whose ring of 16 probe starts, and every smaller ring, all reach it
+without crossing the barrier (probed only when the starts still to decide are
+at least twice the probes). The starts are taken in rounds (256, then doubling)
+with the attractors of the rounds before, so the cells do not depend on
+--threads or --lanes. Rest in well 2 is decided as in full. See
+docs/sensitivity.md.
 
 Uncertainty exponent (Grebogi, McDonald, Ott & Yorke 1983): a start is
 ε-uncertain when x0 ± ε reaches another attractor. The fraction f(ε) of
@@ -133,13 +137,8 @@ pub struct BasinsArgs {
     #[arg(long, value_name = "N", default_value_t = 400)]
     pub uncertainty_samples: usize,
 
-    /// Decide every start in full (no recurrence onto known attractors).
-    #[arg(long)]
-    pub full_decision: bool,
-
-    /// Consecutive section points on a known attractor that decide a start by recurrence.
-    #[arg(long, value_name = "N", default_value_t = 2)]
-    pub recurrence_hits: u32,
+    #[command(flatten)]
+    pub decision: DecisionArgs,
 
     #[command(flatten)]
     pub grid: GridArgs,
@@ -171,6 +170,7 @@ const FILE: GridFile<Cell> = GridFile {
     kind: "basins",
     axes: ["x0", "x0'"],
     point: |c| (c.x0, c.v0),
+    rows: Rows::One,
 };
 
 #[derive(Debug, Serialize)]
@@ -196,13 +196,23 @@ struct KnownJson {
 }
 
 #[derive(Debug, Serialize)]
+struct KnownAperiodicJson {
+    label: String,
+    cells: usize,
+    centroid: [f64; 2],
+    found_by: [f64; 2],
+}
+
+#[derive(Debug, Serialize)]
 struct RecurrenceJson {
     hits: u32,
+    aperiodic_hits: u32,
     first_round: usize,
     probe_directions: u32,
     /// Starts computed in this run that were decided by recurrence.
     decided_by_recurrence: usize,
     known_attractors: Vec<KnownJson>,
+    known_aperiodic: Vec<KnownAperiodicJson>,
 }
 
 #[derive(Debug, Serialize)]
@@ -280,24 +290,16 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
     }
     .check()?;
     let (threads, width) = args.grid.parallel()?;
-    let decision = if args.full_decision {
-        Decision::Full
-    } else {
-        Decision::Recurrence(
-            RecurrenceOptions {
-                hits: args.recurrence_hits,
-                ..RecurrenceOptions::default()
-            }
-            .check()?,
-        )
-    };
+    let decision = args
+        .decision
+        .decision(RecurrenceOptions::default().first_round)?;
 
     let mut run = GridRun::open(&FILE, args.grid.out.as_deref(), (xs, vs), |text, row| {
         parse_row(text, &model, phase).map_err(|e| format!("has a bad row {row}: {e}"))
     })?;
 
     let start = WallClock::now();
-    let mut known: Vec<KnownAttractor> = Vec::new();
+    let mut known = Known::default();
     let mut captured = 0usize;
     let done = run.compute(
         format!("basins: {} starts", run.todo.len()),
@@ -368,10 +370,12 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
             Decision::Full => None,
             Decision::Recurrence(ro) => Some(RecurrenceJson {
                 hits: ro.hits,
+                aperiodic_hits: ro.aperiodic_hits,
                 first_round: ro.first_round,
                 probe_directions: ro.directions,
                 decided_by_recurrence: captured,
                 known_attractors: known
+                    .periodic
                     .iter()
                     .map(|k| KnownJson {
                         label: format!(
@@ -382,6 +386,16 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
                         ),
                         cycle: k.cycle.clone(),
                         capture_radii: k.radii.clone(),
+                        found_by: [k.found_by.0, k.found_by.1],
+                    })
+                    .collect(),
+                known_aperiodic: known
+                    .aperiodic
+                    .iter()
+                    .map(|k| KnownAperiodicJson {
+                        label: k.steady.label(),
+                        cells: k.cells.len(),
+                        centroid: k.centroid,
                         found_by: [k.found_by.0, k.found_by.1],
                     })
                     .collect(),
@@ -538,10 +552,12 @@ fn human(s: &Summary) -> String {
     );
     if let Some(r) = &s.recurrence {
         t.push_str(&format!(
-            "  decided by recurrence: {} of {} starts computed ({} known periodic attractors)\n",
+            "  decided by recurrence: {} of {} starts computed ({} known periodic and {} \
+             aperiodic attractors)\n",
             r.decided_by_recurrence,
             s.grid.computed,
-            r.known_attractors.len()
+            r.known_attractors.len(),
+            r.known_aperiodic.len()
         ));
     }
     for a in s.attractors.iter().take(20) {

@@ -108,13 +108,27 @@ fn key((a, b): (f64, f64)) -> Key {
 }
 
 /// The file of a grid command whose results are `T`: its CSV columns, what the file is called
-/// in errors (`map` file), the names of the two coordinates in warnings (`Ω`, `V`), and the
-/// point of a result.
+/// in errors (`map` file), the names of the two coordinates in warnings (`Ω`, `V`), the point
+/// of a result, and how many rows a point has.
 pub(crate) struct GridFile<T> {
     pub columns: &'static [&'static str],
     pub kind: &'static str,
     pub axes: [&'static str; 2],
     pub point: fn(&T) -> (f64, f64),
+    pub rows: Rows<T>,
+}
+
+/// How a point's result is written.
+pub(crate) enum Rows<T> {
+    /// One row (a later row of the same point replaces an earlier one).
+    One,
+    /// Several rows, each read as a `T` and merged into the point's result with `merge`; a
+    /// point counts as done when `complete` says so (an interrupted run may have written only
+    /// some of its rows: the point is computed again and its rows appended).
+    Group {
+        merge: fn(&mut T, T),
+        complete: fn(&T) -> bool,
+    },
 }
 
 /// One run of a grid command: the grid, the results in hand (read from `--out` or computed),
@@ -157,9 +171,18 @@ impl<'a, T> GridRun<'a, T> {
             read_resumable(path, &file.columns.join(","), file.kind, |text| {
                 line += 1;
                 let t = parse(text, line)?;
-                done.insert(key((file.point)(&t)), t);
+                let k = key((file.point)(&t));
+                match (&file.rows, done.get_mut(&k)) {
+                    (Rows::Group { merge, .. }, Some(had)) => merge(had, t),
+                    _ => {
+                        done.insert(k, t);
+                    }
+                }
                 Ok(())
             })?;
+            if let Rows::Group { complete, .. } = file.rows {
+                done.retain(|_, t| complete(t));
+            }
         }
         let grid: Vec<(f64, f64)> = interleaved(a.n * b.n)
             .map(|k| (a.value(k % a.n), b.value(k / a.n)))
@@ -215,6 +238,24 @@ impl<'a, T> GridRun<'a, T> {
     /// The result at `p`, if in hand.
     pub(crate) fn get(&self, p: (f64, f64)) -> Option<&T> {
         self.done.get(&key(p))
+    }
+
+    /// Writes `--out` anew with `write` (the header first), through a temporary file renamed
+    /// over it, so that an interruption leaves the old file whole.
+    pub(crate) fn rewrite(
+        &self,
+        write: impl FnOnce(&mut CsvFile) -> Result<(), CliError>,
+    ) -> Result<(), CliError> {
+        let Some(path) = self.out else {
+            return Ok(());
+        };
+        let mut name = path.file_name().unwrap_or_default().to_os_string();
+        name.push(".tmp");
+        let tmp = path.with_file_name(name);
+        let mut csv = CsvFile::create(&tmp, &self.file.columns.join(","))?;
+        write(&mut csv)?;
+        csv.finish()?;
+        std::fs::rename(&tmp, path).map_err(|e| CliError::io("cannot replace", path, e))
     }
 
     /// Computes the points of `todo` with a progress bar labelled `message`: `run` is given
@@ -285,6 +326,7 @@ mod tests {
         kind: "test",
         axes: ["a", "b"],
         point: |t| (t.0, t.1),
+        rows: Rows::One,
     };
 
     fn parse(text: &str, row: usize) -> Result<Item, String> {

@@ -45,7 +45,9 @@ mod bifurcation;
 mod bifurcations;
 mod branches;
 mod classify;
+mod coexistence;
 mod common;
+mod decision;
 mod energy_map;
 mod error;
 mod grid;
@@ -110,6 +112,11 @@ enum Command {
     #[command(long_about = basins::LONG_ABOUT, after_help = basins::AFTER_HELP)]
     Basins(basins::BasinsArgs),
 
+    /// Which attractors coexist over an Ω × V grid (or along one parameter): basin fractions
+    /// from a box of starts, decided by recurrence, matched into branches; CSV, PNG.
+    #[command(long_about = coexistence::LONG_ABOUT, after_help = coexistence::AFTER_HELP)]
+    Coexistence(coexistence::CoexistenceArgs),
+
     /// Bifurcation diagram (Fig. 6/8): max x per shaker cycle and impact phases against Ω or
     /// V, with periodic-orbit branches.
     #[command(long_about = bifurcation::LONG_ABOUT, after_help = bifurcation::AFTER_HELP)]
@@ -152,6 +159,7 @@ fn main() -> ExitCode {
         Command::Classify(args) => classify::run(args),
         Command::Map(args) => map::run(args),
         Command::Basins(args) => basins::run(args),
+        Command::Coexistence(args) => coexistence::run(args),
         Command::Bifurcation(args) => bifurcation::run(args),
         Command::Orbit(args) => orbit::run(args),
         Command::Atlas(args) => atlas::run(args),

@@ -16,7 +16,7 @@ use bistable_core::ClassifyOptions;
 use crate::classify::{ClassifyArgs, Record, RecordCsv, CSV_COLUMNS};
 use crate::common::ModelArgs;
 use crate::error::CliError;
-use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary};
+use crate::grid::{self, grid_help, GridArgs, GridFile, GridRun, GridSummary, Rows};
 use crate::output::{print_json, print_text};
 use crate::plot::{self, header, Area, DrawResult, Mark, FONT};
 use crate::ranges::Range;
@@ -30,6 +30,7 @@ const FILE: GridFile<Record> = GridFile {
     kind: "map",
     axes: ["Ω", "V"],
     point: |r| (r.omega, r.velocity),
+    rows: Rows::One,
 };
 
 /// Long description shown by `bistable map --help`.

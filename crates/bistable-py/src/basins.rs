@@ -39,14 +39,14 @@ fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
 /// Classifies the starts `(x0, v0)` at plate phase `phase` (cycles) on `threads` threads (0:
 /// all cores) of `lanes` trajectories each in SIMD lanes (1, 4 or 8); one dict per start, in
 /// order (the `bistable basins` CSV columns without the model's). By recurrence onto known
-/// periodic attractors (`bistable_analysis::recurrence`, `recurrence_hits` consecutive section
-/// points), the starts taken in rounds in the interleaved order of the list (as `bistable
+/// attractors (`bistable_analysis::recurrence`: `recurrence_hits` consecutive section points
+/// near a periodic one, `aperiodic_hits` in the cells of an aperiodic one), the starts taken in rounds in the interleaved order of the list (as `bistable
 /// basins` takes its grid); every start in full with `full_decision`. With `check_only` only the
 /// arguments and the starts are checked (an empty list).
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, phase, starts, zeta=0.02, restitution=0.85, tol=1e-16,
     chatter="accumulation", max_periods=2000.0, lyapunov_periods=300, threads=0, lanes=4,
-    full_decision=false, recurrence_hits=2, check_only=false))]
+    full_decision=false, recurrence_hits=2, aperiodic_hits=20, check_only=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn basin_cells<'py>(
     py: Python<'py>,
@@ -64,6 +64,7 @@ pub fn basin_cells<'py>(
     lanes: usize,
     full_decision: bool,
     recurrence_hits: u32,
+    aperiodic_hits: u32,
     check_only: bool,
 ) -> PyResult<Bound<'py, PyList>> {
     let m = model(py, omega, velocity, zeta, restitution, tol, chatter)?;
@@ -87,6 +88,7 @@ pub fn basin_cells<'py>(
     .map_err(|e| param_err(py, &e))?;
     let ro = RecurrenceOptions {
         hits: recurrence_hits,
+        aperiodic_hits,
         ..RecurrenceOptions::default()
     }
     .check()

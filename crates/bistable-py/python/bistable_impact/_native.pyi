@@ -254,6 +254,9 @@ def basin_cells(
     lyapunov_periods: int = 300,
     threads: int = 0,
     lanes: int = 4,
+    full_decision: bool = False,
+    recurrence_hits: int = 2,
+    aperiodic_hits: int = 20,
     check_only: bool = False,
 ) -> List[Dict[str, Any]]: ...
 

@@ -95,15 +95,17 @@ def basins(
     lyapunov_periods: int = 300,
     full_decision: bool = False,
     recurrence_hits: int = 2,
+    aperiodic_hits: int = 20,
 ):
     """Classifies every start of the grid ``x0 × v0`` at plate phase ``phase`` (cycles) for the
     shaker point ``(omega, velocity)``, as ``bistable basins`` does, and groups the starts by
     the attractor they reach.
 
     By default a start stops once ``recurrence_hits`` consecutive section points lie within
-    the probed capture radius of a periodic attractor already found (``decided_by`` is then
-    ``'recurrence'``; see ``docs/sensitivity.md``); ``full_decision=True`` decides every start
-    in full. The starts are taken in rounds in the CLI's interleaved grid order, so the cells
+    the probed capture radius of a periodic attractor already found, or ``aperiodic_hits``
+    consecutive section points lie in the cells of an aperiodic (chaotic) one (``decided_by``
+    is then ``'recurrence'``; see ``docs/sensitivity.md``); ``full_decision=True`` decides
+    every start in full. The starts are taken in rounds in the CLI's interleaved grid order, so the cells
     are those of ``bistable basins`` for the same grid; with a Dask ``client`` each task makes
     its own rounds (the same labels up to the measured agreement, other ``periods_simulated``).
 
@@ -132,6 +134,7 @@ def basins(
     )  # fmt: skip
     options["full_decision"] = full_decision
     options["recurrence_hits"] = check.integer("recurrence_hits", recurrence_hits, 1, 1000)
+    options["aperiodic_hits"] = check.integer("aperiodic_hits", aperiodic_hits, 1, 100000)
     xs, vs = check.reals("x0", x0), check.reals("v0", v0)
     check.grid(("x0", "v0"), xs, vs)
     starts = [(a, b) for b in vs for a in xs]
