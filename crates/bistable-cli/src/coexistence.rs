@@ -154,7 +154,12 @@ pub struct CoexistenceArgs {
 
     /// Largest distance (max-norm in the section plane, units Δx and ω0·Δx) between the
     /// anchors of two attractors of neighbouring points that are matched into one branch.
-    #[arg(long, value_name = "D", default_value_t = 0.2)]
+    #[arg(
+        long,
+        value_name = "D",
+        default_value_t = 0.2,
+        allow_negative_numbers = true
+    )]
     pub match_distance: f64,
 
     #[command(flatten)]
@@ -699,7 +704,7 @@ struct Summary {
     /// Points where the paper's start reaches a minority basin.
     paper_in_minority: usize,
     branches: Vec<BranchJson>,
-    points: Vec<PointJson>,
+    results: Vec<PointJson>,
     out: Option<std::path::PathBuf>,
     plot: Option<std::path::PathBuf>,
 }
@@ -778,7 +783,7 @@ impl Summary {
                     max_fraction: max,
                 })
                 .collect(),
-            points: points
+            results: points
                 .iter()
                 .map(|(p, ids)| PointJson {
                     omega: p.omega,

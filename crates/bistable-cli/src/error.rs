@@ -151,6 +151,7 @@ impl From<ParamError> for CliError {
             "repeat_periods" => "--repeat-periods",
             "lyapunov_windows" => "--lyapunov-windows",
             "recurrence_hits" => "--recurrence-hits",
+            "aperiodic_hits" => "--aperiodic-hits",
             other => return CliError::invalid(other, e.value, e.rule),
         };
         CliError::invalid(option, e.value, e.rule)

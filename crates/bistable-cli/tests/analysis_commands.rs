@@ -1429,3 +1429,220 @@ fn basins_default_x_range_is_accepted() {
     assert_eq!(v["x_range"], "0:1.2:100");
     assert_eq!(v["points"], 100);
 }
+
+/// `coexistence` over a small grid: `extra` options, `--out csv`, `--json`.
+fn coexistence_args<'a>(csv: &'a str, extra: &[&'a str]) -> Vec<&'a str> {
+    let mut a = vec![
+        "coexistence",
+        "--omega-range",
+        "1.40:1.50:3",
+        "--velocity-range",
+        "0.04:0.05:2",
+        "--starts",
+        "8x8",
+        "--max-periods",
+        "2000",
+        "--out",
+        csv,
+        "--json",
+    ];
+    a.extend_from_slice(extra);
+    a
+}
+
+#[test]
+fn coexistence_writes_resumes_and_matches_branches() {
+    let dir = scratch("coexistence");
+    let (csv, png) = (dir.join("co.csv"), dir.join("co.png"));
+    let j = json(&coexistence_args(s(&csv), &["--plot", s(&png)]));
+    assert_png(&png);
+    assert_eq!(
+        (j["points"].as_u64(), j["starts_per_point"].as_u64()),
+        (Some(6), Some(64))
+    );
+    let rows = csv_rows(&csv);
+    let text = std::fs::read_to_string(&csv).unwrap();
+    // Grid order (Ω inner, V outer), every attractor of a point in one group, numbered from
+    // 1 by basin size; fractions of the 64 starts with their binomial errors; one paper start.
+    let mut points: Vec<(String, String)> = Vec::new();
+    for r in &rows {
+        let p = (r["omega"].clone(), r["velocity"].clone());
+        if points.last() != Some(&p) {
+            points.push(p);
+        }
+    }
+    assert_eq!(points.len(), 6, "{text}");
+    assert_eq!(points[1].0.parse::<f64>().unwrap(), 1.45);
+    for (w, v) in &points {
+        let here: Vec<_> = rows
+            .iter()
+            .filter(|r| &r["omega"] == w && &r["velocity"] == v)
+            .collect();
+        let n: usize = here[0]["attractors"].parse().unwrap();
+        assert_eq!(here.len(), n);
+        let counts: Vec<usize> = here.iter().map(|r| r["count"].parse().unwrap()).collect();
+        assert_eq!(counts.iter().sum::<usize>(), 64, "{here:?}");
+        assert!(counts.windows(2).all(|c| c[0] >= c[1]));
+        for (k, r) in here.iter().enumerate() {
+            assert_eq!(r["attractor"], (k + 1).to_string());
+            assert!(!r["branch"].is_empty());
+            let f: f64 = r["fraction"].parse().unwrap();
+            let se: f64 = r["fraction_se"].parse().unwrap();
+            assert_eq!(f, counts[k] as f64 / 64.0);
+            assert!((se - (f * (1.0 - f) / 64.0).sqrt()).abs() < 1e-15);
+        }
+        assert_eq!(
+            here.iter().filter(|r| r["paper_start"] == "true").count(),
+            1
+        );
+        // One branch per attractor at a point.
+        let mut b: Vec<&str> = here.iter().map(|r| r["branch"].as_str()).collect();
+        b.sort_unstable();
+        b.dedup();
+        assert_eq!(b.len(), n);
+    }
+    // Rest in well 2 keeps one branch over the whole grid.
+    let rest: Vec<&str> = rows
+        .iter()
+        .filter(|r| r["class"] == "rest")
+        .map(|r| r["branch"].as_str())
+        .collect();
+    assert_eq!(rest.len(), 6);
+    assert!(rest.iter().all(|b| *b == rest[0]));
+    // The paper's start is the map's start: its class and period are `classify`'s.
+    let c = json(&[
+        "classify",
+        "--omega",
+        "1.45",
+        "--velocity",
+        "0.05",
+        "--max-periods",
+        "2000",
+    ]);
+    let paper = rows
+        .iter()
+        .find(|r| r["omega"] == "1.45" && r["velocity"] == "0.05" && r["paper_start"] == "true")
+        .unwrap();
+    assert_eq!(paper["paper_class"], c["class"].as_str().unwrap());
+    assert_eq!(paper["paper_period"], c["period"].to_string());
+
+    // Resuming after an interruption that left the first point's rows partly written: the
+    // missing points are computed and the file ends as it was.
+    let lines: Vec<&str> = text.lines().collect();
+    let n0: usize = rows[0]["attractors"].parse().unwrap();
+    assert!(n0 >= 2, "{text}");
+    std::fs::write(
+        &csv,
+        format!("{}\n{}\n{}", lines[0], lines[1], &lines[2][..5]),
+    )
+    .unwrap();
+    let again = json(&coexistence_args(s(&csv), &[]));
+    assert_eq!(
+        (again["resumed"].as_u64(), again["computed"].as_u64()),
+        (Some(0), Some(6))
+    );
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), text);
+    let done = json(&coexistence_args(s(&csv), &[]));
+    assert_eq!(
+        (done["resumed"].as_u64(), done["computed"].as_u64()),
+        (Some(6), Some(0))
+    );
+    assert_eq!(std::fs::read_to_string(&csv).unwrap(), text);
+
+    // A file of another grid, or other starts, is refused naming --out.
+    for other in [
+        &["--omega-range", "1.40:1.60:3"][..],
+        &["--starts", "random:64:1"][..],
+    ] {
+        let mut a = coexistence_args(s(&csv), &[]);
+        a.extend_from_slice(other);
+        let o = bistable(&a);
+        assert_eq!(o.status.code(), Some(2), "{other:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains("--out"), "{other:?}: {}", stderr(&o));
+    }
+}
+
+#[test]
+fn coexistence_stopped_by_ctrl_c_resumes_to_the_same_result() {
+    let dir = scratch("coexistence-sigint");
+    let (whole, cut) = (dir.join("whole.csv"), dir.join("cut.csv"));
+    let args = |csv: &Path| -> Vec<String> {
+        [
+            "coexistence",
+            "--omega-range",
+            "1.2:1.8:7",
+            "--velocity-range",
+            "0.03:0.07:5",
+            "--starts",
+            "10x10",
+            "--max-periods",
+            "2000",
+            "--threads",
+            "1",
+            "--out",
+            s(csv),
+        ]
+        .iter()
+        .map(|a| a.to_string())
+        .collect()
+    };
+    let o = Command::new(env!("CARGO_BIN_EXE_bistable"))
+        .args(args(&whole))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    let mut child = Command::new(env!("CARGO_BIN_EXE_bistable"))
+        .args(args(&cut))
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // Interrupt once some points are written.
+    let started = std::time::Instant::now();
+    while std::fs::read_to_string(&cut).map_or(0, |t| t.lines().count()) < 4 {
+        assert!(started.elapsed().as_secs() < 120, "no rows written");
+        std::thread::sleep(std::time::Duration::from_millis(5));
+    }
+    let killed = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(killed.success());
+    let status = child.wait().unwrap();
+    assert!(!status.success(), "the run ended before the interrupt");
+    let partial = std::fs::read_to_string(&cut).unwrap();
+    assert!(partial.lines().count() < std::fs::read_to_string(&whole).unwrap().lines().count());
+    let o = Command::new(env!("CARGO_BIN_EXE_bistable"))
+        .args(args(&cut))
+        .output()
+        .unwrap();
+    assert!(o.status.success(), "{}", stderr(&o));
+    assert_eq!(
+        std::fs::read_to_string(&cut).unwrap(),
+        std::fs::read_to_string(&whole).unwrap()
+    );
+}
+
+#[test]
+fn coexistence_refuses_bad_starts_naming_the_option() {
+    let cases: &[(&[&str], &str)] = &[
+        (&["--box", "0.5:0.5,-0.6:0.6"], "--box"),
+        (&["--box", "0:1.2,0.6:-0.6"], "--box"),
+        (&["--box", "-0.1:1.2,-0.6:0.6"], "--box"),
+        (&["--box", "0:1.2"], "--box"),
+        (&["--starts", "0x20"], "--starts"),
+        (&["--starts", "random:0"], "--starts"),
+        (&["--starts", "2000x2000"], "--starts"),
+        (&["--starts", "twenty"], "--starts"),
+        (&["--match-distance", "-1"], "--match-distance"),
+        (&["--aperiodic-hits", "0"], "--aperiodic-hits"),
+    ];
+    for (extra, option) in cases {
+        let mut a = vec!["coexistence", "--plot", "never.png"];
+        a.extend_from_slice(extra);
+        let o = bistable(&a);
+        assert_eq!(o.status.code(), Some(2), "{extra:?}: {}", stderr(&o));
+        assert!(stderr(&o).contains(option), "{extra:?}: {}", stderr(&o));
+    }
+    assert!(!Path::new("never.png").exists());
+}
