@@ -103,7 +103,7 @@ def test_readme_cli_examples_run_with_small_sizes(cli, tmp_path):
 def test_docstring_examples():
     import bistable_impact as bi
 
-    modules = (bi, bi.sweep, bi.analyses, bi.cluster)
+    modules = (bi, bi.sweep, bi.analyses, bi.cluster, bi.coexistence)
     for module in modules:
         result = doctest.testmod(module, optionflags=doctest.NORMALIZE_WHITESPACE)
         assert result.failed == 0, module.__name__

@@ -29,7 +29,7 @@ use std::sync::Arc;
 
 use bistable_core::{
     Classification, ClassifyOptions, ClassifyRun, Event, Instant, LaneRun, ParamError, Params,
-    SimError, Simulator, SolverOptions, Width,
+    ResponseClass, SimError, Simulator, SolverOptions, Width,
 };
 
 use crate::basins::{identify, Cell, DecidedBy, Decision, Steady};
@@ -37,6 +37,7 @@ use crate::branches::Branches;
 use crate::ensemble::{self, Run, RunSpec, Task};
 use crate::parallel::Threads;
 use crate::progress::OnProgress;
+use crate::record::Value;
 use crate::recurrence::{
     reached_cell, rounds, Known, ProbePlan, Reached, RecurrenceOptions, RecurrenceRun,
     RecurrenceSpec,
@@ -480,8 +481,7 @@ impl PointTask {
 
     fn next_round(&mut self, fresh: Known) -> Result<Vec<PointRun>, SimError> {
         let mut table = Known::clone(&self.known);
-        table.periodic.extend(fresh.periodic);
-        table.aperiodic.extend(fresh.aperiodic);
+        table.extend(fresh);
         self.known = Arc::new(table);
         self.round += 1;
         self.round_runs()
@@ -633,6 +633,133 @@ pub fn match_branches(
         }
     }
     (ids, branches)
+}
+
+/// Names of the columns of a coexistence table, one row per point and attractor: the CSV of
+/// `bistable coexistence` and the DataFrame of the Python package (see [`row`]).
+pub const COLUMNS: [&str; 28] = [
+    "omega",
+    "velocity",
+    "zeta",
+    "restitution",
+    "box",
+    "starts",
+    "decision",
+    "attractors",
+    "attractor",
+    "branch",
+    "label",
+    "class",
+    "period",
+    "chaotic",
+    "final_well",
+    "at_rest",
+    "anchor_x",
+    "anchor_v",
+    "count",
+    "fraction",
+    "fraction_se",
+    "decided_by_recurrence",
+    "periods_simulated",
+    "paper_start",
+    "paper_class",
+    "paper_period",
+    "paper_chaotic",
+    "paper_final_well",
+];
+
+/// What every row of a table records of the sweep's settings (a resumed table must agree).
+#[derive(Debug, Clone, PartialEq)]
+pub struct TableSettings {
+    /// Damping ratio.
+    pub zeta: f64,
+    /// Coefficient of restitution.
+    pub restitution: f64,
+    /// The box, `X0:X1;V0:V1`.
+    pub start_box: String,
+    /// The starts, `NXxNV` or `random:K:SEED`.
+    pub starts: String,
+    /// `recurrence` or `full`.
+    pub decision: &'static str,
+}
+
+impl TableSettings {
+    /// The settings of a sweep with `model`'s damping and restitution and `o`.
+    pub fn new(model: &Model, o: &CoexistenceOptions) -> Self {
+        let b = o.starts.bounds;
+        Self {
+            zeta: model.params.zeta(),
+            restitution: model.restitution(),
+            start_box: format!("{}:{};{}:{}", b.x[0], b.x[1], b.v[0], b.v[1]),
+            starts: match o.starts.sampling {
+                Sampling::Grid { nx, nv } => format!("{nx}x{nv}"),
+                Sampling::Random { n, seed } => format!("random:{n}:{seed}"),
+            },
+            decision: match o.decision {
+                Decision::Full => "full",
+                Decision::Recurrence(_) => "recurrence",
+            },
+        }
+    }
+}
+
+/// The class of an attractor's steady state: `rest` (rest in well 2), `continuous_interwell`
+/// (it crosses the barrier) or `intrawell` (it stays in its final well; a start that reaches
+/// it is intrawell or transient interwell by its transient).
+pub fn steady_class(s: &Steady) -> &'static str {
+    if s.at_rest {
+        "rest"
+    } else if s.across {
+        ResponseClass::ContinuousInterwell.name()
+    } else {
+        ResponseClass::Intrawell.name()
+    }
+}
+
+/// The values of the row of attractor `k` of `p`, in the order of [`COLUMNS`]: `branch` its
+/// id from 0 (written from 1; `None` while not matched), `label` its [`Steady::label`].
+/// Attractors are numbered from 1, largest basin first.
+pub fn row<'a>(
+    p: &PointCoexistence,
+    k: usize,
+    branch: Option<usize>,
+    t: &'a TableSettings,
+    label: &'a str,
+) -> [Value<'a>; 28] {
+    let a = &p.attractors[k];
+    let st = &a.steady;
+    let paper = &p.paper.outcome;
+    let int = |v: Option<u64>| v.map_or(Value::Null, Value::I);
+    [
+        Value::F(p.omega),
+        Value::F(p.velocity),
+        Value::F(t.zeta),
+        Value::F(t.restitution),
+        Value::S(&t.start_box),
+        Value::S(&t.starts),
+        Value::S(t.decision),
+        Value::I(p.attractors.len() as u64),
+        Value::I(k as u64 + 1),
+        int(branch.map(|b| b as u64 + 1)),
+        Value::S(label),
+        Value::S(steady_class(st)),
+        int(st.period.map(u64::from)),
+        Value::Bool(st.chaotic),
+        int(st.well.map(|w| u64::from(w.number()))),
+        Value::Bool(st.at_rest),
+        a.anchor.map_or(Value::Null, |x| Value::F(x[0])),
+        a.anchor.map_or(Value::Null, |x| Value::F(x[1])),
+        Value::I(a.count as u64),
+        Value::F(a.fraction(p.starts)),
+        Value::F(a.standard_error(p.starts)),
+        Value::I(a.by_recurrence as u64),
+        Value::F(a.periods_simulated),
+        Value::Bool(k == p.paper_attractor),
+        Value::S(paper.class.name()),
+        int(paper.period.map(u64::from)),
+        Value::Bool(paper.chaotic),
+        int(paper.final_well.map(|w| u64::from(w.number()))),
+    ]
 }
 
 /// Longest period whose orbit branches [`orbit_branches`] continues.

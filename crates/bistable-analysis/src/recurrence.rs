@@ -204,7 +204,8 @@ impl KnownAttractor {
 }
 
 /// An aperiodic (chaotic or not) attractor found at this shaker point: the cells of side
-/// [`CELL`] that the section points of the run that found it occupy.
+/// [`CELL`] that the section points of the runs that found it occupy (one entry per steady
+/// state: runs of one kind and well on different sets join their cells).
 #[derive(Debug, Clone, PartialEq)]
 pub struct KnownAperiodic {
     /// Its steady state (aperiodic, chaotic or not, in one well or across the barrier).
@@ -258,9 +259,16 @@ impl Known {
             .map(|k| k.centroid)
     }
 
-    fn extend(&mut self, fresh: Known) {
+    /// Adds what a round found; the cells of an aperiodic steady state already known are
+    /// joined to its entry (which keeps its centroid and first start).
+    pub(crate) fn extend(&mut self, fresh: Known) {
         self.periodic.extend(fresh.periodic);
-        self.aperiodic.extend(fresh.aperiodic);
+        for a in fresh.aperiodic {
+            match self.aperiodic.iter_mut().find(|k| k.steady == a.steady) {
+                Some(k) => k.cells.extend(a.cells),
+                None => self.aperiodic.push(a),
+            }
+        }
     }
 }
 
@@ -281,18 +289,24 @@ pub(crate) fn rounds(first: usize, n: usize) -> impl Iterator<Item = (usize, usi
 
 /// The attractors new to `known` among what a round's full decisions found (in the order of
 /// their starts): a periodic cell with its cycle, an aperiodic one with its section points.
-/// The periodic ones are not probed yet (radii 0).
+/// The periodic ones are not probed yet (radii 0). Aperiodic runs of one steady state (kind
+/// and well) may lie on different sets (e.g. two chaotic bands in well 1): their cells are
+/// joined into one entry per steady state, and a run whose cells the known entry lacks adds
+/// them.
 pub(crate) fn learn(
     known: &Known,
     found: impl IntoIterator<Item = (Cell, Vec<[f64; 2]>)>,
 ) -> Known {
     let mut fresh = Known::default();
     for (cell, points) in found {
-        if points.is_empty() || cell.at_rest || known.matches(&cell) || fresh.matches(&cell) {
+        if points.is_empty() || cell.at_rest {
             continue;
         }
         let found_by = (cell.x0, cell.v0);
         if cell.outcome.period.is_some() {
+            if known.matches(&cell) || fresh.matches(&cell) {
+                continue;
+            }
             let Some(anchor) = cell.anchor else { continue };
             fresh.periodic.push(KnownAttractor {
                 steady: cell.steady(),
@@ -301,18 +315,28 @@ pub(crate) fn learn(
                 cycle: points,
                 found_by,
             });
-        } else {
-            let n = points.len() as f64;
-            let centroid = points
-                .iter()
-                .fold([0.0, 0.0], |a, y| [a[0] + y[0] / n, a[1] + y[1] / n]);
-            fresh.aperiodic.push(KnownAperiodic {
-                steady: cell.steady(),
-                cells: points.iter().map(|&y| cell_key(y)).collect(),
-                centroid,
-                found_by,
-            });
+            continue;
         }
+        let steady = cell.steady();
+        let cells: HashSet<(i64, i64)> = points.iter().map(|&y| cell_key(y)).collect();
+        if let Some(k) = fresh.aperiodic.iter_mut().find(|k| k.steady == steady) {
+            k.cells.extend(cells);
+            continue;
+        }
+        let held = |k: &KnownAperiodic| k.steady == steady && cells.is_subset(&k.cells);
+        if known.aperiodic.iter().any(held) {
+            continue;
+        }
+        let n = points.len() as f64;
+        let centroid = points
+            .iter()
+            .fold([0.0, 0.0], |a, y| [a[0] + y[0] / n, a[1] + y[1] / n]);
+        fresh.aperiodic.push(KnownAperiodic {
+            steady,
+            cells,
+            centroid,
+            found_by,
+        });
     }
     fresh
 }

@@ -230,14 +230,7 @@ pub trait RecordCsv: Sized {
 
 impl RecordCsv for Record {
     fn fields(&self) -> [Field<'_>; 24] {
-        self.values().map(|v| match v {
-            Value::F(x) => Field::F(x),
-            Value::I(n) => Field::I(n),
-            Value::Bool(b) => Field::flag(b),
-            Value::S(t) => Field::S(t),
-            Value::Null => Field::Empty,
-            Value::Outcomes(_, text) => Field::S(text),
-        })
+        self.values().map(Field::from)
     }
 
     fn from_csv(cells: &[&str]) -> Result<Self, String> {

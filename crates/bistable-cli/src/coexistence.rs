@@ -12,11 +12,12 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::basins::{Cell, DecidedBy, Decision, Steady};
+use bistable_analysis::basins::{Cell, DecidedBy, Steady};
 use bistable_analysis::branches::Branches;
 use bistable_analysis::coexistence::{
-    coexistence, match_branches, orbit_branches, CoexistenceOptions, Coexisting, PointCoexistence,
-    Sampling, StartBox, Starts, FIRST_ROUND,
+    coexistence, match_branches, orbit_branches, row as row_values, steady_class,
+    CoexistenceOptions, Coexisting, PointCoexistence, Sampling, StartBox, Starts, TableSettings,
+    COLUMNS, FIRST_ROUND,
 };
 use bistable_analysis::sensitivity::Outcome;
 use bistable_analysis::Model;
@@ -172,38 +173,6 @@ pub struct CoexistenceArgs {
     pub model: ModelArgs,
 }
 
-/// CSV header of `coexistence`.
-pub const COLUMNS: [&str; 28] = [
-    "omega",
-    "velocity",
-    "zeta",
-    "restitution",
-    "box",
-    "starts",
-    "decision",
-    "attractors",
-    "attractor",
-    "branch",
-    "label",
-    "class",
-    "period",
-    "chaotic",
-    "final_well",
-    "at_rest",
-    "anchor_x",
-    "anchor_v",
-    "count",
-    "fraction",
-    "fraction_se",
-    "decided_by_recurrence",
-    "periods_simulated",
-    "paper_start",
-    "paper_class",
-    "paper_period",
-    "paper_chaotic",
-    "paper_final_well",
-];
-
 /// The rows of one point read back from the file (some may be missing).
 #[derive(Debug, Clone)]
 struct PointRows {
@@ -283,34 +252,6 @@ fn starts_of(args: &CoexistenceArgs) -> Result<Starts, CliError> {
     })
 }
 
-/// What a row records of the run's settings, compared on resuming.
-struct Settings {
-    zeta: f64,
-    restitution: f64,
-    start_box: String,
-    starts: String,
-    decision: &'static str,
-}
-
-impl Settings {
-    fn of(model: &Model, s: &Starts, decision: Decision) -> Self {
-        let b = s.bounds;
-        Self {
-            zeta: model.params.zeta(),
-            restitution: model.restitution(),
-            start_box: format!("{}:{};{}:{}", b.x[0], b.x[1], b.v[0], b.v[1]),
-            starts: match s.sampling {
-                Sampling::Grid { nx, nv } => format!("{nx}x{nv}"),
-                Sampling::Random { n, seed } => format!("random:{n}:{seed}"),
-            },
-            decision: match decision {
-                Decision::Full => "full",
-                Decision::Recurrence(_) => "recurrence",
-            },
-        }
-    }
-}
-
 /// Runs `bistable coexistence`.
 pub fn run(args: &CoexistenceArgs) -> Result<(), CliError> {
     let omegas = args.omega_range.omegas("--omega-range")?;
@@ -338,7 +279,7 @@ pub fn run(args: &CoexistenceArgs) -> Result<(), CliError> {
         classify,
         decision,
     };
-    let settings = Settings::of(&model, &starts, decision);
+    let settings = TableSettings::new(&model, &options);
     let on_grid = |w: f64, v: f64| {
         (0..omegas.n).any(|i| omegas.value(i) == w) && (0..vs.n).any(|j| vs.value(j) == v)
     };
@@ -443,63 +384,19 @@ pub fn run(args: &CoexistenceArgs) -> Result<(), CliError> {
     run.check(&done, "points")
 }
 
-/// The attractor's class of steady state: `rest`, `continuous_interwell` or `intrawell`.
-fn steady_class(s: &Steady) -> &'static str {
-    if s.at_rest {
-        "rest"
-    } else if s.across {
-        ResponseClass::ContinuousInterwell.name()
-    } else {
-        ResponseClass::Intrawell.name()
-    }
-}
-
-/// The CSV row of attractor `k` of `p` (`branch`: its id from 0, `None` while not matched).
+/// The CSV row of attractor `k` of `p` (see [`row_values`]).
 fn row<'a>(
-    p: &'a PointCoexistence,
+    p: &PointCoexistence,
     k: usize,
     branch: Option<usize>,
-    s: &'a Settings,
+    t: &'a TableSettings,
     label: &'a str,
-) -> Vec<Field<'a>> {
-    let a = &p.attractors[k];
-    let st = &a.steady;
-    let paper = &p.paper.outcome;
-    let opt_int = |v: Option<u64>| v.map_or(Field::Empty, Field::I);
-    vec![
-        Field::F(p.omega),
-        Field::F(p.velocity),
-        Field::F(s.zeta),
-        Field::F(s.restitution),
-        Field::S(&s.start_box),
-        Field::S(&s.starts),
-        Field::S(s.decision),
-        Field::I(p.attractors.len() as u64),
-        Field::I(k as u64 + 1),
-        opt_int(branch.map(|b| b as u64 + 1)),
-        Field::S(label),
-        Field::S(steady_class(st)),
-        opt_int(st.period.map(u64::from)),
-        Field::flag(st.chaotic),
-        opt_int(st.well.map(|w| u64::from(w.number()))),
-        Field::flag(st.at_rest),
-        a.anchor.map_or(Field::Empty, |x| Field::F(x[0])),
-        a.anchor.map_or(Field::Empty, |x| Field::F(x[1])),
-        Field::I(a.count as u64),
-        Field::F(a.fraction(p.starts)),
-        Field::F(a.standard_error(p.starts)),
-        Field::I(a.by_recurrence as u64),
-        Field::F(a.periods_simulated),
-        Field::flag(k == p.paper_attractor),
-        Field::S(paper.class.name()),
-        opt_int(paper.period.map(u64::from)),
-        Field::flag(paper.chaotic),
-        opt_int(paper.final_well.map(|w| u64::from(w.number()))),
-    ]
+) -> [Field<'a>; 28] {
+    row_values(p, k, branch, t, label).map(Field::from)
 }
 
 /// One row read back: its point with only this row's attractor present.
-fn parse_row(text: &str, s: &Settings) -> Result<PointRows, String> {
+fn parse_row(text: &str, s: &TableSettings) -> Result<PointRows, String> {
     let f: Vec<&str> = text.split(',').collect();
     if f.len() != COLUMNS.len() {
         return Err(format!("{} fields, expected {}", f.len(), COLUMNS.len()));
@@ -713,7 +610,7 @@ impl Summary {
     fn new(
         args: &CoexistenceArgs,
         (omegas, vs): (Range, Range),
-        s: &Settings,
+        s: &TableSettings,
         grid: GridSummary,
         points: &[(&PointCoexistence, &[usize])],
         branches: usize,

@@ -42,6 +42,21 @@ pub enum Field<'a> {
     Empty,
 }
 
+impl<'a> From<bistable_analysis::record::Value<'a>> for Field<'a> {
+    /// A record's value as a CSV field (a list of outcomes as its text).
+    fn from(v: bistable_analysis::record::Value<'a>) -> Self {
+        use bistable_analysis::record::Value;
+        match v {
+            Value::F(x) => Field::F(x),
+            Value::I(n) => Field::I(n),
+            Value::Bool(b) => Field::flag(b),
+            Value::S(t) => Field::S(t),
+            Value::Null => Field::Empty,
+            Value::Outcomes(_, text) => Field::S(text),
+        }
+    }
+}
+
 impl Field<'_> {
     /// `true` or `false`.
     pub fn flag(v: bool) -> Field<'static> {

@@ -122,8 +122,17 @@ pub(crate) fn table<'py>(
 }
 
 pub(crate) fn record_dict<'py>(py: Python<'py>, r: &Record) -> PyResult<Bound<'py, PyDict>> {
+    values_dict(py, &mut r.pairs())
+}
+
+/// A dict of `(key, value)` pairs: reals, counts, flags and names as Python's, `None` for
+/// null, outcomes as a list of dicts ([`outcome_list`]).
+pub(crate) fn values_dict<'py>(
+    py: Python<'py>,
+    pairs: &mut dyn Iterator<Item = (&str, Value<'_>)>,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
-    for (k, v) in r.pairs() {
+    for (k, v) in pairs {
         match v {
             Value::F(x) => d.set_item(k, x)?,
             Value::I(n) => d.set_item(k, n)?,

@@ -20,6 +20,7 @@ use pyo3::prelude::*;
 mod basins;
 mod bifurcation;
 mod classify;
+mod coexistence;
 mod common;
 mod energy;
 mod orbit;
@@ -52,6 +53,8 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_class::<simulate::PySimulator>()?;
     m.add_function(wrap_pyfunction!(classify::classify, m)?)?;
     m.add_function(wrap_pyfunction!(classify::classify_many, m)?)?;
+    m.add_function(wrap_pyfunction!(coexistence::coexistence_points, m)?)?;
+    m.add_function(wrap_pyfunction!(coexistence::coexistence_table, m)?)?;
     m.add_function(wrap_pyfunction!(classify::thresholds_of, m)?)?;
     m.add_function(wrap_pyfunction!(classify::outcomes_text, m)?)?;
     m.add_function(wrap_pyfunction!(classify::outcomes_from_text, m)?)?;
@@ -68,6 +71,10 @@ fn _native(m: &Bound<'_, PyModule>) -> PyResult<()> {
     m.add_function(wrap_pyfunction!(linspace, m)?)?;
     // The classify record's keys in order: the map CSV's columns (one definition, in Rust).
     m.add("COLUMNS", bistable_analysis::record::COLUMNS.to_vec())?;
+    m.add(
+        "COEXISTENCE_COLUMNS",
+        bistable_analysis::coexistence::COLUMNS.to_vec(),
+    )?;
     // Most values of one grid (the CLI's cap on a range's points).
     m.add("MAX_POINTS", bistable_analysis::grid::MAX_POINTS)?;
     // Most worker threads of a `threads` argument.

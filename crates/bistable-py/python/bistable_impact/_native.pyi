@@ -19,6 +19,7 @@ Outcome = TypedDict(
 
 #: Keys of the classify record, in order: the map CSV's columns.
 COLUMNS: List[str]
+COEXISTENCE_COLUMNS: List[str]
 #: Most values of one grid and points of one map (the CLI's cap on ranges, 1e7).
 MAX_POINTS: int
 #: Most worker threads of a ``threads`` argument (1024).
@@ -271,3 +272,42 @@ def basin_uncertainty_starts(grid: Dict[str, Any]) -> List[Tuple[float, float]]:
 def basin_uncertainty(
     grid: Dict[str, Any], reached: List[Dict[str, Any]]
 ) -> Tuple[List[Dict[str, Any]], Optional[float]]: ...
+
+def coexistence_points(
+    points: List[Tuple[float, float]],
+    start_box: Tuple[float, float, float, float] = (0.0, 1.2, -0.6, 0.6),
+    grid: Optional[Tuple[int, int]] = None,
+    random: Optional[Tuple[int, int]] = None,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 20000.0,
+    lyapunov_periods: int = 300,
+    full_decision: bool = False,
+    recurrence_hits: int = 2,
+    aperiodic_hits: int = 20,
+    threads: int = 0,
+    lanes: int = 4,
+    progress: Optional[Callable[[int, int], Any]] = None,
+    check_only: bool = False,
+) -> List[Dict[str, Any]]: ...
+
+def coexistence_table(
+    points: List[Dict[str, Any]],
+    omegas: List[float],
+    velocities: List[float],
+    match_distance: float = 0.2,
+    start_box: Tuple[float, float, float, float] = (0.0, 1.2, -0.6, 0.6),
+    grid: Optional[Tuple[int, int]] = None,
+    random: Optional[Tuple[int, int]] = None,
+    zeta: float = 0.02,
+    restitution: float = 0.85,
+    tol: float = 1e-16,
+    chatter: str = "accumulation",
+    max_periods: float = 20000.0,
+    lyapunov_periods: int = 300,
+    full_decision: bool = False,
+    recurrence_hits: int = 2,
+    aperiodic_hits: int = 20,
+) -> List[Dict[str, Any]]: ...

@@ -254,3 +254,6 @@ def read_csv(path: Union[str, "os.PathLike[str]"]) -> "pd.DataFrame":
 
 # Basins of attraction (`bistable basins`), kept in their own module.
 from .basins import basin_uncertainty, basins  # noqa: E402,F401
+
+# Which attractors coexist (`bistable coexistence`), kept in its own module.
+from .coexistence import coexistence  # noqa: E402,F401
