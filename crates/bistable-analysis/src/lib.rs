@@ -37,6 +37,7 @@ pub mod event_log;
 pub mod grazing;
 pub mod grid;
 pub mod model;
+mod numerics;
 pub mod orbit;
 pub mod parallel;
 pub mod period;
