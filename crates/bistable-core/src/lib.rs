@@ -54,7 +54,7 @@ pub use ramp::SetpointRamp;
 pub use sampled::{PieceMemo, Sample, SampleHistory};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
 pub use shaker::{MAX_VELOCITY, OMEGA_RANGE};
-pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
+pub use shooting::{shoot, PeriodicOrbit, ShootError, ShootOptions};
 pub use simd::SimdPath;
 pub use simulator::{
     Flights, Observer, SimError, Simulator, State, Stats, StepKey, StepView, FLIGHT_LANES,
