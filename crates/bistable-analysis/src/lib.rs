@@ -25,12 +25,12 @@
 
 pub mod arclength;
 pub mod basins;
-pub mod bifurcation;
 pub mod bifurcations;
 pub mod branches;
 pub mod codim2;
 pub mod continuation;
 pub mod cycles;
+pub mod diagram;
 pub mod energy;
 pub mod ensemble;
 pub mod event_log;
