@@ -3,7 +3,7 @@
 //!
 //! A refused call (illegal in the current state, bad argument or value) returns an error message,
 //! which the export logs and turns into `fmi2Error`/`fmi3Error`; the instance is left as it was.
-//! One instance type serves FMI 2.0 (`exports.rs`) and FMI 3.0 (`exports3.rs`): the versions
+//! One instance type serves FMI 2.0 (`exports2.rs`) and FMI 3.0 (`exports3.rs`): the versions
 //! differ in the logger, the names of their functions and, for FMI 3.0 co-simulation, event mode
 //! and early return ([`Api`]).
 

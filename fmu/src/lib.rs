@@ -2,12 +2,12 @@
 //! `bistable-core`.
 //!
 //! The shared library exports the 44 common, co-simulation and Model Exchange `fmi2*` functions (see
-//! `exports.rs` and the generated header `include/bistable_impact.h`). Variables, value
+//! `exports2.rs` and the generated header `include/bistable_impact.h`). Variables, value
 //! references, start values and ranges come from the top-level `modelDescription.xml` (through
 //! `build.rs`). Every export catches panics and checks its arguments; see `fmu/README.md`.
 
 pub mod ahead;
-pub mod exports;
+pub mod exports2;
 pub mod exports3;
 pub mod fmi2;
 pub mod fmi3;
