@@ -16,10 +16,9 @@ use crate::fmi2::*;
 use crate::fmi3::fmi3LogMessageCallback;
 use crate::md::{cat, var, Causality, Kind, CATEGORIES, EVENT_INDICATORS, STATES, VARS};
 use crate::me::Me;
-use crate::model::{
-    bit, Model, PlateInputs, StepFailure, VarSet, ALL, MAX_CLOCK_SPAN, MAX_PLATE_ORDER,
-    MAX_STEP_SPAN,
-};
+use crate::model::outputs::{bit, VarSet, ALL};
+use crate::model::plate::{PlateInputs, MAX_CLOCK_SPAN, MAX_PLATE_ORDER};
+use crate::model::{Model, StepFailure, MAX_STEP_SPAN};
 use crate::num::Num;
 use crate::state::Snapshot;
 
