@@ -23,7 +23,7 @@ use std::cmp::Ordering;
 
 use bistable_core::{Flights, Instant, Simulator, StepKey, FLIGHT_LANES as LANES};
 
-use crate::model::Scale;
+use crate::model::si::Scale;
 
 /// The mass read ahead in the current Taylor step (derived data, not part of the model's
 /// state: an empty one gives the same values).

@@ -1,5 +1,5 @@
 //! The FMI 3.0 functions with C linkage: common, Model Exchange and co-simulation (with event mode
-//! and early return). They drive the same [`Instance`] as the FMI 2.0 functions (`exports.rs`),
+//! and early return). They drive the same [`Instance`] as the FMI 2.0 functions (`exports2.rs`),
 //! whose argument checks and panic guard (`call`) they share; an instance made by one version's
 //! functions is refused by the other's.
 //!
@@ -16,7 +16,7 @@
 //! adjoint derivatives, variable dependencies and scheduled execution are not provided.
 //!
 //! # Safety
-//! As for `exports.rs`: pointers as the FMI 3.0 standard specifies, the instance a live handle
+//! As for `exports2.rs`: pointers as the FMI 3.0 standard specifies, the instance a live handle
 //! from `fmi3Instantiate*`.
 #![allow(non_snake_case, clippy::missing_safety_doc, clippy::too_many_arguments)]
 
@@ -24,7 +24,7 @@ use std::ffi::{c_char, CString};
 use std::panic::catch_unwind;
 use std::ptr;
 
-use crate::exports::{self as states, array, array_mut, call, out, text, write_array};
+use crate::exports2::{self as states, array, array_mut, call, out, text, write_array};
 use crate::fmi2::fmi2EventInfo;
 use crate::fmi3::*;
 use crate::instance::{allowed, Access, Api, Instance, Interface, Logger, Outcome};
@@ -212,7 +212,7 @@ pub unsafe extern "C" fn fmi3InstantiateScheduledExecution(
 #[no_mangle]
 pub unsafe extern "C" fn fmi3FreeInstance(instance: fmi3Instance) {
     let _ = catch_unwind(|| {
-        if let Some(inst) = crate::exports::instance(instance) {
+        if let Some(inst) = crate::exports2::instance(instance) {
             inst.retire();
             drop(Box::from_raw(instance.cast::<Instance>()));
         }
@@ -1426,11 +1426,11 @@ pub unsafe extern "C" fn fmi3ActivateModelPartition(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::exports::instance;
+    use crate::exports2::instance;
 
     #[test]
     fn instances_of_one_version_are_refused_by_the_other() {
-        use crate::exports::{fmi2DoStep, fmi2GetFMUstate};
+        use crate::exports2::{fmi2DoStep, fmi2GetFMUstate};
         let name = c"t";
         let token = CString::new(GUID).unwrap();
         let c = unsafe {

@@ -3,7 +3,7 @@
 //!
 //! A refused call (illegal in the current state, bad argument or value) returns an error message,
 //! which the export logs and turns into `fmi2Error`/`fmi3Error`; the instance is left as it was.
-//! One instance type serves FMI 2.0 (`exports.rs`) and FMI 3.0 (`exports3.rs`): the versions
+//! One instance type serves FMI 2.0 (`exports2.rs`) and FMI 3.0 (`exports3.rs`): the versions
 //! differ in the logger, the names of their functions and, for FMI 3.0 co-simulation, event mode
 //! and early return ([`Api`]).
 
@@ -16,10 +16,9 @@ use crate::fmi2::*;
 use crate::fmi3::fmi3LogMessageCallback;
 use crate::md::{cat, var, Causality, Kind, CATEGORIES, EVENT_INDICATORS, STATES, VARS};
 use crate::me::Me;
-use crate::model::{
-    bit, Model, PlateInputs, StepFailure, VarSet, ALL, MAX_CLOCK_SPAN, MAX_PLATE_ORDER,
-    MAX_STEP_SPAN,
-};
+use crate::model::outputs::{bit, VarSet, ALL};
+use crate::model::plate::{PlateInputs, MAX_CLOCK_SPAN, MAX_PLATE_ORDER};
+use crate::model::{Model, StepFailure, MAX_STEP_SPAN};
 use crate::num::Num;
 use crate::state::Snapshot;
 

@@ -3,7 +3,7 @@
 //!
 //! The physics is the core's: free-flight acceleration, contact force and impact law come from
 //! [`Params`], the chatter rule from [`ChatterRule`], and the end of a chatter sequence is run by
-//! the core [`Simulator`] itself. Units as in `model.rs` (SI at the interface, nondimensional
+//! the core [`Simulator`] itself. Units as in `model/si.rs` (SI at the interface, nondimensional
 //! inside).
 //!
 //! - **Modes.** Free flight: `x' = v`, `v' = −2ζv − U'(x)`. Sticking: `x' = ż`, `v' = z̈` (the
@@ -35,11 +35,14 @@ use bistable_core::{
 };
 
 use crate::md::var;
-use crate::model::{
-    below_plate, describe_event, origin_in_range, plate_inputs, plate_piece, restore_phase_ref,
-    save_phase_ref, scale_of, Mass, Observed, Plate, PlateInputs, Scale, Setup, ShakerMode, VarSet,
-    ALL, MAX_CLOCK_SPAN,
+use crate::model::checkpoint::{restore_phase_ref, save_phase_ref};
+use crate::model::outputs::{Mass, Observed, Plate, VarSet, ALL};
+use crate::model::plate::{
+    origin_in_range, plate_inputs, plate_piece, PlateInputs, ShakerMode, MAX_CLOCK_SPAN,
+    MAX_PLATE_ORDER,
 };
+use crate::model::setup::{below_plate, Setup};
+use crate::model::si::{describe_event, describe_param, scale_of, Scale};
 use crate::num::Num;
 
 /// Horizon (time units) of the accumulation rule that hands a chatter sequence to the core: the
@@ -74,7 +77,7 @@ pub struct Tail {
 /// The discrete and continuous state of a Model Exchange run (nondimensional).
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct SavedMe {
-    /// Phase reference (see `model::SavedModel::phase_ref`).
+    /// Phase reference (see `model::checkpoint::SavedModel::phase_ref`).
     pub phase_ref: (f64, f64, f64, f64, f64, f64),
     /// `(Ω, V)` in force.
     pub applied: (f64, f64),
@@ -421,7 +424,7 @@ impl Me {
         if wanted != self.s.applied {
             let next = PlateMotion::from(self.phase_ref)
                 .continued_by_sinusoid(now, wanted.0, wanted.1)
-                .map_err(|e| crate::model::describe_param(&e))?;
+                .map_err(|e| describe_param(&e))?;
             self.phase_ref = next;
             self.s.phase_ref = save_phase_ref(&next);
             self.s.applied = wanted;
@@ -526,7 +529,7 @@ impl Me {
         let plate: PlateMotion = match self.mode {
             ShakerMode::Internal => self.phase_ref.into(),
             ShakerMode::External => {
-                let none: PlateInputs = [None; crate::model::MAX_PLATE_ORDER + 1];
+                let none: PlateInputs = [None; MAX_PLATE_ORDER + 1];
                 let inputs = plate_inputs(values, &none);
                 plate_piece(&self.scale, Instant::new(tau), end, &inputs, None)
                     .ok()?

@@ -1,9 +1,19 @@
-//! The adapter between FMU variables (SI units) and the nondimensional core.
+//! The co-simulation model: a running simulation in SI units ([`Model`]) that steps, reads its
+//! outputs and saves and restores itself; and, in its submodules, what Model Exchange
+//! (`me.rs`) shares with it.
 //!
-//! Units (`model.md` Sec. 6): time `t = τ/ω0` (s), lengths `x̂ = Δx·x` (m), velocities
-//! `ω0Δx·v` (m/s), accelerations `ω0²Δx·a` (m/s²), energies `m·ω0²Δx²·E` (J). With `omega0 = 1`,
-//! `delta_x = 1` and `mass = 1` every conversion is a multiplication by 1: the FMU is the
-//! nondimensional model bit for bit.
+//! - [`si`]: the SI units and the FMU's words for core errors and events;
+//! - [`setup`]: the parameters checked and converted for a start ([`setup::Setup`]);
+//! - [`plate`]: what moves the plate, and its pieces from the inputs in external mode;
+//! - [`outputs`]: the output variables, state derivatives and event indicators
+//!   ([`outputs::Observed`]);
+//! - [`checkpoint`]: the parts of an FMU state and the checks of a restored one.
+
+pub mod checkpoint;
+pub mod outputs;
+pub mod plate;
+pub mod setup;
+pub mod si;
 
 use std::cell::RefCell;
 use std::ops::ControlFlow;
@@ -11,25 +21,22 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 
 use bistable_core::interrupt::{with_check, Check, CHECK_EVERY};
-use bistable_core::sampled::{taylor_piece, TaylorPieceError};
 use bistable_core::{
-    potential, ChatterRule, Checkpoint, ContactMode, Event, Impact, Instant, Observer, ParamError,
-    Params, PieceMemo, PlateMotion, PlateRecord, PolyPiece, Sample, SampleHistory, SimError,
-    Simulator, Sinusoid, SolverOptions, State, StepView, Well,
+    potential, Checkpoint, ContactMode, Event, Instant, Observer, PieceMemo, PlateMotion,
+    PlateRecord, PolyPiece, Sample, SampleHistory, SimError, Simulator, Sinusoid, SolverOptions,
+    StepView, Well,
 };
 
 use crate::ahead::Ahead;
 use crate::md::var;
-use crate::num::Num;
-
-/// Highest plate derivative that an external piece carries (degree of `PolyPiece`).
-pub const MAX_PLATE_ORDER: usize = bistable_core::shaker::MAX_POLY_DEGREE;
-
-/// Largest span `Ω·|τ − τ_origin|` (shaker radians; time units when `Ω < 1`) from the origin
-/// of a sinusoid: the core keeps the shaker phase accurate below 2^52 (`Instant::angle`), and a
-/// step costs time in proportion to the periods it spans, so a request beyond this (e.g.
-/// `h = 1e20` s) could never finish.
-pub(crate) const MAX_CLOCK_SPAN: f64 = 4_503_599_627_370_496.0;
+use checkpoint::{
+    check_checkpoint, check_inside_step, restore_phase_ref, save_phase_ref, sinusoid_record,
+    SavedModel,
+};
+use outputs::{bit, fly_limit, mass_acceleration, Observed, VarSet, ALL, XV};
+use plate::{is_hermite, moderate, plate_inputs, plate_piece, PlateInputs, ShakerMode};
+use setup::{below_plate, chatter_rule, Setup};
+use si::{describe, describe_event, describe_param, scale_of, Scale};
 
 /// Largest span `Ω·(τ_end − τ)` (time units when `Ω < 1`) of one `fmi2DoStep`: the work of a
 /// step grows with it (about 0.5 µs per shaker radian at the paper's baseline), so a longer step
@@ -42,83 +49,6 @@ pub(crate) const MAX_STEP_SPAN: f64 = 3e4;
 /// step on the slowest states measured (chatter with `e = 1`), a step stops with a Discard
 /// within about 0.3 s of wall time.
 pub(crate) const MAX_STEP_BUDGET: u64 = 250_000;
-
-/// Whether a sinusoid of frequency `omega` with origin `origin` is within the clock range at
-/// `now` (and the origin not after it).
-pub(crate) fn origin_in_range(omega: f64, origin: Instant, now: Instant) -> bool {
-    origin <= now && omega.max(1.0) * now.since(origin) < MAX_CLOCK_SPAN
-}
-
-/// Chatter rule of the FMU (the core's default, as the CLI uses).
-fn chatter_rule() -> ChatterRule {
-    SolverOptions::default().chatter()
-}
-
-/// What moves the plate (`shaker_mode`, an Enumeration in the model description).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum ShakerMode {
-    /// `ż = V cos(Ωτ)` from the parameters.
-    Internal = 1,
-    /// From the inputs `z_in`, `zdot_in` and their derivatives.
-    External = 2,
-}
-
-impl ShakerMode {
-    /// From the variable's value (range-checked at the boundary).
-    pub fn of(value: f64) -> Option<Self> {
-        match value {
-            1.0 => Some(Self::Internal),
-            2.0 => Some(Self::External),
-            _ => None,
-        }
-    }
-}
-
-/// How the plate is rebuilt from sampled inputs in external mode (`plate_reconstruction`, an
-/// Enumeration in the model description). Input derivatives, when given for a step, take
-/// precedence over both.
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Reconstruction {
-    /// `z_in + zdot_in·s`, the position mismatch blended out over the step (first order: the
-    /// plate velocity is a staircase and its acceleration is wrong by `O(1)`).
-    Taylor = 1,
-    /// Quintic Hermite extrapolation through the last three samples (`bistable_core::sampled`).
-    Hermite = 2,
-}
-
-impl Reconstruction {
-    /// From the variable's value (range-checked at the boundary).
-    pub fn of(value: f64) -> Option<Self> {
-        match value {
-            1.0 => Some(Self::Taylor),
-            2.0 => Some(Self::Hermite),
-            _ => None,
-        }
-    }
-}
-
-pub use bistable_core::units::Scale;
-
-/// The SI scales of the parameter values.
-pub fn scale_of(values: &[f64]) -> Scale {
-    Scale {
-        omega0: values[var::omega0],
-        dx: values[var::delta_x],
-        mass: values[var::mass],
-    }
-}
-
-/// Plate derivatives for the next step (SI, order 0..=5); `None`: not given (zero above order 1).
-pub type PlateInputs = [Option<f64>; MAX_PLATE_ORDER + 1];
-
-/// The plate derivatives from the inputs: `z_in`, `zdot_in`, then the higher ones given with
-/// `fmi2SetRealInputDerivatives` (`derivatives`, orders 2..=5).
-pub(crate) fn plate_inputs(values: &[f64], derivatives: &PlateInputs) -> PlateInputs {
-    let mut p = *derivatives;
-    p[0] = Some(values[var::z_in]);
-    p[1] = Some(values[var::zdot_in]);
-    p
-}
 
 /// A running simulation in SI units.
 #[derive(Clone)]
@@ -225,37 +155,6 @@ pub enum StepFailure {
     Stopped(String),
     /// A refused request (bad plate data, time mismatch): report `fmi2Error`.
     Refused(String),
-}
-
-/// Renames the core's parameter names to the FMU's variable names.
-fn fmu_name(core: &str) -> &str {
-    match core {
-        "restitution" => "e",
-        "omega" => "Omega",
-        "velocity" => "V",
-        other => other,
-    }
-}
-
-/// A core parameter error in the FMU's words.
-pub fn describe_param(e: &ParamError) -> String {
-    format!("invalid {} = {}: {}", fmu_name(e.name), e.value, e.rule)
-}
-
-/// A core error in the FMU's words (SI times).
-fn describe(e: &SimError, scale: &Scale) -> String {
-    match e {
-        SimError::Param(p) => describe_param(p),
-        SimError::Zeno { t, impacts } => format!(
-            "chatter did not end after {impacts} impacts at t = {} s and the contact force pulls the mass off the plate (Zeno guard)",
-            scale.time(*t)
-        ),
-        SimError::NonFinite { t } => format!(
-            "the solution is no longer finite at t = {} s: parameters outside the model's scope",
-            scale.time(*t)
-        ),
-        other => other.to_string(),
-    }
 }
 
 impl Model {
@@ -875,407 +774,9 @@ impl Model {
     }
 }
 
-/// Acceleration of the mass (nondimensional) in the state `st` with plate acceleration `zdd`:
-/// the plate's while riding it, else free flight (Eq. 4).
-pub fn mass_acceleration(params: &Params, st: &State, zdd: f64) -> f64 {
-    match st.mode {
-        ContactMode::Sticking => zdd,
-        ContactMode::Free => params.flight_acceleration(st.x, st.v),
-    }
-}
-
-/// Impact phase in cycles: the core's (internal mode), else from the reference sinusoid.
-pub fn phase_of(phase_ref: &Sinusoid, i: &Impact) -> f64 {
-    i.phase
-        .unwrap_or_else(|| phase_ref.phase_cycles(Instant::new(i.t)))
-}
-
-/// A line for the `logEvents` category (SI units, full precision), for both interfaces.
-pub fn describe_event(s: &Scale, phase_ref: &Sinusoid, e: &Event) -> String {
-    match *e {
-        Event::Impact(i) => format!(
-            "impact {} at t={:.17e} s phase={:.17e} x={:.17e} m v_before={:.17e} m/s v_after={:.17e} m/s",
-            i.index,
-            s.time(i.t),
-            phase_of(phase_ref, &i),
-            s.length(i.x),
-            s.velocity(i.v_before),
-            s.velocity(i.v_after)
-        ),
-        Event::StickStart { t, x, cause, .. } => format!(
-            "stick start at t={:.17e} s x={:.17e} m ({cause:?})",
-            s.time(t),
-            s.length(x)
-        ),
-        Event::StickEnd { t, x, .. } => format!(
-            "stick end at t={:.17e} s x={:.17e} m",
-            s.time(t),
-            s.length(x)
-        ),
-        Event::SnapThrough { t, to, .. } => format!(
-            "snap-through to well {} at t={:.17e} s",
-            to.number(),
-            s.time(t)
-        ),
-    }
-}
-
-/// A set of variables: bit `i` stands for `VARS[i]` (the model has fewer than 64).
-pub(crate) type VarSet = u64;
-
-/// The set holding only variable `i`.
-pub(crate) const fn bit(i: usize) -> VarSet {
-    1 << i
-}
-
-/// Every variable.
-pub(crate) const ALL: VarSet = !0;
-
-/// The mass's position and velocity.
-const XV: VarSet = bit(var::x) | bit(var::v);
-
-/// Mass position and velocity, contact mode and well now (nondimensional).
-pub type Mass = (f64, f64, ContactMode, Well);
-
-/// Plate position, velocity and acceleration now (nondimensional).
-pub type Plate = (f64, f64, f64);
-
-/// What the outputs are computed from (nondimensional), for both interfaces. The mass and the
-/// plate are evaluated on demand, each at most once per [`Observed::write`]: a read of `x` and
-/// `v` in free flight evaluates the step's series only, not the plate's sinusoid.
-pub struct Observed<'a, M: Fn() -> Mass, P: Fn() -> Plate> {
-    /// Model parameters.
-    pub params: &'a Params,
-    /// Time now (`τ`).
-    pub tau: f64,
-    /// The mass now.
-    pub mass: M,
-    /// The plate now.
-    pub plate: P,
-    /// Impacts so far.
-    pub impacts: u64,
-    /// Snap-throughs so far.
-    pub snap_throughs: u64,
-    /// The last impact.
-    pub last_impact: Option<Impact>,
-    /// Momentum per unit mass given to the plate (see [`Model::impulse`]).
-    pub impulse: f64,
-}
-
-/// `f()`, computed on the first call only.
-fn once<T: Copy>(cache: &mut Option<T>, f: impl FnOnce() -> T) -> T {
-    *cache.get_or_insert_with(f)
-}
-
-impl<M: Fn() -> Mass, P: Fn() -> Plate> Observed<'_, M, P> {
-    /// Writes the variables of `want` among the outputs, the state derivatives `der_x`,
-    /// `der_v`, the event indicators and `time` (SI); the others are left as they are.
-    pub fn write(&self, s: &Scale, phase_ref: &Sinusoid, values: &mut [f64], want: VarSet) {
-        let (mut mass_now, mut plate_now) = (None, None);
-        let mut mass = || once(&mut mass_now, &self.mass);
-        let mut plate = || once(&mut plate_now, &self.plate);
-        let wants = |i: usize| want & bit(i) != 0;
-        let count = |n: u64| n.min(i32::MAX as u64) as f64;
-        if wants(var::time) {
-            values[var::time] = s.time(self.tau);
-        }
-        if wants(var::x) {
-            values[var::x] = s.length(mass().0);
-        }
-        if wants(var::v) {
-            values[var::v] = s.velocity(mass().1);
-        }
-        if wants(var::der_x) {
-            let riding = mass().2 == ContactMode::Sticking;
-            values[var::der_x] = s.velocity(if riding { plate().1 } else { mass().1 });
-        }
-        if wants(var::der_v) {
-            let (x, v, mode, _) = mass();
-            let a = match mode {
-                ContactMode::Sticking => plate().2,
-                ContactMode::Free => self.params.flight_acceleration(x, v),
-            };
-            values[var::der_v] = s.acceleration(a);
-        }
-        if wants(var::z) {
-            values[var::z] = s.length(plate().0);
-        }
-        if wants(var::zdot) {
-            values[var::zdot] = s.velocity(plate().1);
-        }
-        if wants(var::kinetic_energy) {
-            values[var::kinetic_energy] = s.energy(potential::kinetic(mass().1));
-        }
-        if wants(var::potential_energy) {
-            values[var::potential_energy] = s.energy(potential::energy(mass().0));
-        }
-        if wants(var::impact_count) {
-            values[var::impact_count] = count(self.impacts);
-        }
-        if wants(var::snap_through_count) {
-            values[var::snap_through_count] = count(self.snap_throughs);
-        }
-        if wants(var::well) {
-            values[var::well] = f64::from(mass().3.number());
-        }
-        if wants(var::in_contact) {
-            values[var::in_contact] = f64::from(u8::from(mass().2 == ContactMode::Sticking));
-        }
-        const IMPACT: VarSet = bit(var::last_impact_time)
-            | bit(var::last_impact_phase)
-            | bit(var::last_impact_v_before)
-            | bit(var::last_impact_v_after)
-            | bit(var::last_impact_delta_k);
-        if want & IMPACT != 0 {
-            let (t, phase, vb, va, dk) = match &self.last_impact {
-                Some(i) => (
-                    s.time(i.t),
-                    if wants(var::last_impact_phase) {
-                        phase_of(phase_ref, i)
-                    } else {
-                        0.0
-                    },
-                    s.velocity(i.v_before),
-                    s.velocity(i.v_after),
-                    s.energy(i.delta_k),
-                ),
-                None => (0.0, 0.0, 0.0, 0.0, 0.0),
-            };
-            for (i, value) in [
-                (var::last_impact_time, t),
-                (var::last_impact_phase, phase),
-                (var::last_impact_v_before, vb),
-                (var::last_impact_v_after, va),
-                (var::last_impact_delta_k, dk),
-            ] {
-                if wants(i) {
-                    values[i] = value;
-                }
-            }
-        }
-        if wants(var::plate_impulse) {
-            values[var::plate_impulse] = s.mass * s.velocity(self.impulse);
-        }
-        if wants(var::contact_indicator) {
-            values[var::contact_indicator] = contact_indicator(self.params, s, mass(), plate());
-        }
-        if wants(var::barrier_indicator) {
-            values[var::barrier_indicator] = s.length(mass().0 - potential::BARRIER);
-        }
-    }
-
-    /// The event indicators (SI): the gap `x − z` (m) in free flight or the contact force per
-    /// unit mass (m/s², Eq. 9) while sticking, and `x − Δx/2` (m).
-    pub fn indicators(&self, s: &Scale) -> [f64; 2] {
-        let mass = (self.mass)();
-        [
-            contact_indicator(self.params, s, mass, (self.plate)()),
-            s.length(mass.0 - potential::BARRIER),
-        ]
-    }
-}
-
-/// The contact indicator (SI) of the mass and the plate: the gap `x − z` (m) in free flight or
-/// the contact force per unit mass (m/s², Eq. 9) while sticking.
-fn contact_indicator(params: &Params, s: &Scale, mass: Mass, (z, zdot, zddot): Plate) -> f64 {
-    match mass.2 {
-        ContactMode::Free => s.length(mass.0 - z),
-        ContactMode::Sticking => s.acceleration(params.contact_force(z, zdot, zddot)),
-    }
-}
-
-/// What both interfaces build from the parameters at the start time.
-pub struct Setup {
-    /// Unit conversions.
-    pub scale: Scale,
-    /// Plate source.
-    pub mode: ShakerMode,
-    /// `ζ`, `e`.
-    pub params: Params,
-    /// Solver settings (`tol`, the chatter rule).
-    pub opts: SolverOptions,
-    /// Phase reference (the plate in internal mode), phase 0 at the start time.
-    pub phase_ref: Sinusoid,
-    /// Start instant (`τ`).
-    pub origin: Instant,
-    /// Initial position and velocity (nondimensional).
-    pub x0: f64,
-    /// See `x0`.
-    pub v0: f64,
-}
-
-impl Setup {
-    /// Checks the parameters and converts them for a start at `t_start` (s).
-    pub fn of(values: &[f64], t_start: f64) -> Result<Self, String> {
-        let scale = scale_of(values);
-        let mode = ShakerMode::of(values[var::shaker_mode])
-            .ok_or_else(|| format!("invalid shaker_mode = {}", values[var::shaker_mode]))?;
-        let params =
-            Params::new(values[var::zeta], values[var::e]).map_err(|e| describe_param(&e))?;
-        let opts =
-            SolverOptions::new(values[var::tol], chatter_rule()).map_err(|e| describe_param(&e))?;
-        let tau0 = scale.tau(t_start);
-        if !tau0.is_finite() {
-            return Err(format!("start time {t_start} s times omega0 is not finite"));
-        }
-        let origin = Instant::new(tau0);
-        let phase_ref = Sinusoid::new(values[var::Omega], values[var::V])
-            .and_then(|s| s.with_origin(origin, 0.0, 0.0))
-            .map_err(|e| describe_param(&e))?;
-        Ok(Self {
-            scale,
-            mode,
-            params,
-            opts,
-            phase_ref,
-            origin,
-            x0: scale.of_length(values[var::x0]),
-            v0: scale.of_velocity(values[var::v0]),
-        })
-    }
-}
-
-/// Refusal of an initial position below the plate position `z` (m).
-pub fn below_plate(values: &[f64], z: f64) -> String {
-    format!(
-        "x0 = {} m is below the plate position z = {} m at the start time: the mass must start on or above the plate",
-        Num(values[var::x0]),
-        Num(z),
-    )
-}
-
-/// The plate record of a sinusoid.
-fn sinusoid_record(s: &Sinusoid) -> PlateRecord {
-    let (origin, phase0, offset) = s.origin();
-    PlateRecord::Sinusoid {
-        omega: s.omega(),
-        velocity: s.velocity(),
-        origin: origin.parts(),
-        phase0,
-        offset,
-    }
-}
-
-/// A saved phase reference (see [`SavedModel::phase_ref`]) checked against the `(Ω, V)` in
-/// force `applied` and the current instant `now`.
-pub fn restore_phase_ref(
-    scale: &Scale,
-    (omega, v, hi, lo, phase0, offset): (f64, f64, f64, f64, f64, f64),
-    applied: (f64, f64),
-    now: Instant,
-) -> Result<Sinusoid, String> {
-    let origin = Instant::from_parts(hi, lo).ok_or("invalid phase origin in the FMU state")?;
-    if !(phase0.abs() <= std::f64::consts::PI && origin_in_range(omega, origin, now)) {
-        return Err(format!(
-            "the FMU state's phase reference (origin {} s, phase {phase0} rad) is out of range",
-            scale.time(origin.to_f64())
-        ));
-    }
-    // `(Ω, V)` in force were values of the parameters, so within their ranges.
-    let in_range =
-        |i: usize, x: f64| (crate::md::VARS[i].min..=crate::md::VARS[i].max).contains(&x);
-    let applied_ok = in_range(var::Omega, omega) && in_range(var::V, v);
-    if (omega, v) != applied || !applied_ok {
-        return Err("the FMU state's phase reference does not match its shaker or plate".into());
-    }
-    Sinusoid::new(omega, v)
-        .and_then(|s| s.with_origin(origin, phase0, offset))
-        .map_err(|e| describe_param(&e))
-}
-
-/// The parts of a phase reference an FMU state keeps (see [`SavedModel::phase_ref`]).
-pub fn save_phase_ref(s: &Sinusoid) -> (f64, f64, f64, f64, f64, f64) {
-    let (origin, phase0, offset) = s.origin();
-    let (hi, lo) = origin.parts();
-    (s.omega(), s.velocity(), hi, lo, phase0, offset)
-}
-
-/// Checks of a saved core state beyond the core's own (`Simulator::from_checkpoint`): angles
-/// reduced as the core leaves them, the last impact not after the current time.
-fn check_checkpoint(cp: &Checkpoint) -> Result<(), String> {
-    // Malformed instants are refused by the core.
-    let Some(now) = Instant::from_parts(cp.now.0, cp.now.1) else {
-        return Ok(());
-    };
-    if let PlateRecord::Sinusoid {
-        omega,
-        origin: (hi, lo),
-        phase0,
-        ..
-    } = cp.plate
-    {
-        let in_range =
-            Instant::from_parts(hi, lo).is_none_or(|origin| origin_in_range(omega, origin, now));
-        if !(phase0.abs() <= std::f64::consts::PI && in_range) {
-            return Err(format!(
-                "the FMU state's plate sinusoid (origin {hi}, phase {phase0} rad) is out of range"
-            ));
-        }
-    }
-    let last = cp
-        .last_impact_t
-        .and_then(|(hi, lo)| Instant::from_parts(hi, lo));
-    if last.is_some_and(|last| last > now) {
-        return Err("the FMU state's last impact is after its current time".into());
-    }
-    // Counters far beyond any run (2^53 steps take decades) would overflow as the run goes on.
-    let s = cp.stats;
-    let limit = 1u64 << 53;
-    if [s.steps, s.impacts, s.sticks, s.snap_throughs]
-        .iter()
-        .any(|&n| n > limit)
-        || cp.short_flights > cp.max_chatter_impacts
-    {
-        return Err("the FMU state's counters are out of range".into());
-    }
-    // The last impact is the one counted last, at the recorded instant.
-    let counted = match (cp.last_impact, last) {
-        (Some(i), Some(t)) => i.index.checked_add(1) == Some(cp.stats.impacts) && i.t == t.to_f64(),
-        (None, None) => cp.stats.impacts == 0,
-        _ => false,
-    };
-    if !counted {
-        return Err("the FMU state's last impact does not match its impact count".into());
-    }
-    Ok(())
-}
-
-/// Longest span `max(Ω, 1)·(τ − τ_step start)` between the start of the core's current Taylor step
-/// and its current time in a saved state: its steps are at most 8 time units long
-/// (`taylor::MAX_STEP`) and cover about 2 radians of a sinusoidal plate; the margin keeps this
-/// check independent of those choices while bounding the work below.
-const MAX_SAVED_STEP: f64 = 64.0;
-
 /// The model at a communication point, to go back to when a step fails: core, phase reference,
 /// `(Ω, V)` in force, plate samples, plate impulse.
 type Undo = (Checkpoint, Sinusoid, (f64, f64), SampleHistory, f64);
-
-/// The largest nondimensional position, velocity and acceleration (of the mass and the plate)
-/// for which a step without the state check (`Model::fly_over`) is sure to give finite outputs:
-/// the outputs are at most quartic in them (the potential energy) times a unit factor.
-fn fly_limit(scale: &Scale) -> f64 {
-    let factor = [
-        scale.length(1.0),
-        scale.velocity(1.0),
-        scale.acceleration(1.0),
-        scale.energy(1.0),
-        scale.specific_energy(1.0),
-        1.0,
-    ]
-    .iter()
-    .fold(0.0_f64, |m, f| m.max(f.abs()));
-    (1e280 / factor).sqrt().sqrt().min(1e50)
-}
-
-/// Whether `plate_reconstruction` rebuilds sampled inputs by the Hermite scheme. The core keeps
-/// a free flight across the plate pieces of an external-mode step (`Simulator::keep_flight`)
-/// only for such pieces, in steps without input derivatives; pieces from input derivatives or
-/// the first-order scheme restart the integration at each piece as before (the first-order
-/// scheme's plate acceleration is wrong by O(1), which makes its trajectory depend on every
-/// rounding: it is kept as it behaved).
-fn is_hermite(values: &[f64]) -> bool {
-    Reconstruction::of(values[var::plate_reconstruction]) == Some(Reconstruction::Hermite)
-}
 
 /// `Σ (v_before − v_after)` over the impacts among `events`: the momentum per unit mass they
 /// gave the plate.
@@ -1288,120 +789,11 @@ fn impulse_of(events: &[Event]) -> f64 {
         .fold(0.0, |a, b| a + b)
 }
 
-/// Counts what an advance computes, stopping at the first event (its time kept).
-#[derive(Default)]
-struct Probe {
-    steps: u32,
-    events: u32,
-    first_event: Option<f64>,
-}
-
-impl Observer for Probe {
-    fn event(&mut self, e: &Event) -> ControlFlow<()> {
-        self.events += 1;
-        self.first_event.get_or_insert(e.t());
-        ControlFlow::Break(())
-    }
-
-    fn step(&mut self, _: &StepView<'_>) {
-        self.steps += 1;
-    }
-}
-
-/// A saved core state is inside its current Taylor step (as every state the core stops at is):
-/// going on from the saved step start to the saved time needs at most the one step and meets no
-/// event before that time (a state where the core stopped with a Discard may fail that step
-/// again). An event at the saved time itself, reached without a step, is one still pending at
-/// that instant: a state saved at an early return between two events of one instant (an impact
-/// with `e = 0` and the plastic start of sticking it causes) is the FMU's own. A state whose time lies beyond its step (e.g. a step start moved far
-/// back) would otherwise report an extrapolated state or integrate across the gap.
-fn check_inside_step(sim: &Simulator, omega: f64) -> Result<(), String> {
-    let cp = sim.checkpoint();
-    let (t0, now) = (cp.t0, sim.instant());
-    let span = Instant::from_parts(t0.0, t0.1).map_or(f64::INFINITY, |t0| now.since(t0));
-    let mut probe = Probe::default();
-    let reached = span * omega.max(1.0) <= MAX_SAVED_STEP
-        && match sim.clone().advance_instant(now, &mut probe) {
-            Ok(_) | Err(SimError::Zeno { .. } | SimError::NonFinite { .. }) => true,
-            Err(_) => false,
-        };
-    let pending_now = probe.steps == 0 && probe.first_event == Some(sim.time());
-    let inside = reached && probe.steps <= 1 && (probe.events == 0 || pending_now);
-    if inside {
-        Ok(())
-    } else {
-        Err(format!(
-            "the FMU state's simulator time is not inside its current step (step start {} before it)",
-            span
-        ))
-    }
-}
-
-/// The parts of a [`Model`] an FMU state keeps (plain numbers).
-#[derive(Debug, Clone, PartialEq)]
-pub struct SavedModel {
-    /// Core checkpoint.
-    pub checkpoint: Checkpoint,
-    /// Phase reference: `Ω`, `V`, origin `(hi, lo)`, phase at origin (rad), offset.
-    pub phase_ref: (f64, f64, f64, f64, f64, f64),
-    /// `(Ω, V)` in force.
-    pub applied: (f64, f64),
-    /// Communication time (s).
-    pub time: f64,
-    /// External mode: plate samples `(sample, joined)`, oldest first (see [`SampleHistory`]).
-    pub history: Vec<(Sample, bool)>,
-    /// Momentum per unit mass given to the plate in the last step (see [`Model::impulse`]).
-    pub impulse: f64,
-    /// The last step stopped at an event (see [`Model::at_event`]).
-    pub at_event: bool,
-}
-
-/// The plate over `[start, end]` (τ) from the inputs (SI derivatives, `canInterpolateInputs`):
-/// their nondimensional Taylor polynomial at the step start, blended from the plate position
-/// `z_now` by [`taylor_piece`] (`None`: the plate starts at `z_in`, initialization).
-pub(crate) fn plate_piece(
-    scale: &Scale,
-    start: Instant,
-    end: f64,
-    inputs: &PlateInputs,
-    z_now: Option<f64>,
-) -> Result<PolyPiece, String> {
-    let mut c = [0.0; MAX_PLATE_ORDER + 1];
-    for (k, (ck, d)) in c.iter_mut().zip(inputs).enumerate() {
-        *ck = scale.plate_coefficient(k, d.unwrap_or(0.0));
-    }
-    taylor_piece(start, end, c, z_now).map_err(|e| match e {
-        TaylorPieceError::Empty => format!(
-            "the step must end after t = {} s",
-            scale.time(start.to_f64())
-        ),
-        TaylorPieceError::NotFinite(k) => format!(
-            "the plate polynomial from the inputs is not finite (coefficient of order {k}); inputs z_in, zdot_in and their derivatives must be finite and moderate"
-        ),
-        TaylorPieceError::Piece(e) => describe_param(&e),
-    })
-}
-
-/// `piece` if its position, velocity and acceleration stay below what makes an output overflow
-/// (`fly_limit`). The plate at the start time must: its outputs are read in initialization
-/// mode, before any step could fail on them (a step's plate is checked by the step itself,
-/// which ends with `fmi2Discard` where the state stops being finite).
-fn moderate(piece: PolyPiece, scale: &Scale) -> Result<PolyPiece, String> {
-    let limit = fly_limit(scale);
-    if piece.bounds().iter().all(|&b| b <= limit) {
-        return Ok(piece);
-    }
-    Err(format!(
-        "the plate polynomial from the inputs at t = {} s is too large (its position, velocity or acceleration could exceed {} in units of delta_x and omega0); inputs z_in, zdot_in and their derivatives must be moderate",
-        scale.time(piece.start().to_f64()),
-        Num(limit)
-    ))
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::md::{Causality, VARS};
+    use crate::model::plate::MAX_PLATE_ORDER;
 
     fn defaults() -> Vec<f64> {
         VARS.iter().map(|v| v.start).collect()
@@ -1580,69 +972,5 @@ mod tests {
                 );
             }
         }
-    }
-
-    #[test]
-    fn plate_blend_starts_at_the_plate_and_ends_on_the_inputs() {
-        let scale = Scale {
-            omega0: 2.0,
-            dx: 0.5,
-            mass: 1.0,
-        };
-        let inputs = [Some(0.1), Some(0.2), Some(-0.4), None, None, None];
-        let start = Instant::new(1.0);
-        let piece = plate_piece(&scale, start, 1.5, &inputs, Some(0.25)).unwrap();
-        let p = PlateMotion::from(piece);
-        // Starts where the plate was (nondimensional 0.25), with the input velocity.
-        let (z0, zd0, _) = p.motion(start);
-        assert!((z0 - 0.25).abs() < 1e-15);
-        assert!((zd0 - 0.2 / (0.5 * 2.0)).abs() < 1e-15);
-        // Ends on the inputs' Taylor polynomial: z = (0.1 + 0.2 s − 0.2 s²)/Δx, s = 0.25 s.
-        let s = 0.25;
-        let (z1, _, _) = p.motion(Instant::new(1.5));
-        assert!(
-            (z1 - (0.1 + 0.2 * s - 0.2 * s * s) / 0.5).abs() < 1e-14,
-            "{z1}"
-        );
-        // Without a plate position (initialization) it starts on the inputs.
-        let first = plate_piece(&scale, start, 1.5, &inputs, None).unwrap();
-        assert!((PlateMotion::from(first).motion(start).0 - 0.2).abs() < 1e-15);
-        assert!(plate_piece(&scale, start, 0.5, &inputs, None).is_err());
-    }
-
-    #[test]
-    fn a_start_plate_that_would_overflow_the_outputs_is_refused() {
-        let scale = Scale {
-            omega0: 1.0,
-            dx: 0.5,
-            mass: 1.0,
-        };
-        let start = Instant::new(0.0);
-        // A finite acceleration input of 1e300 m/s² (the fuzzer's): z'' = 2e300 in units of Δx.
-        let huge = [Some(0.0), Some(0.0), Some(1e300), None, None, None];
-        let e = moderate(
-            plate_piece(&scale, start, 1.0, &huge, None).unwrap(),
-            &scale,
-        );
-        assert!(e.unwrap_err().contains("too large"));
-        // Moderate inputs pass, and the bounds hold over the piece.
-        let fine = [Some(0.1), Some(0.2), Some(-0.4), Some(3.0), None, None];
-        let piece = plate_piece(&scale, start, 1.0, &fine, None).unwrap();
-        let piece = moderate(piece, &scale).unwrap();
-        let [bz, bv, ba] = piece.bounds();
-        let p = PlateMotion::from(piece);
-        for k in 0..=100 {
-            let (z, v, a) = p.motion(Instant::new(f64::from(k) / 100.0));
-            assert!(
-                z.abs() <= bz && v.abs() <= bv && a.abs() <= ba,
-                "{k}: {z} {v} {a}"
-            );
-        }
-    }
-
-    #[test]
-    fn core_parameter_errors_use_the_fmu_names() {
-        let e = Params::new(0.1, 7.0).unwrap_err();
-        assert!(describe_param(&e).starts_with("invalid e = 7"));
     }
 }

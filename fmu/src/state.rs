@@ -18,7 +18,8 @@ use bistable_core::{ContactMode, Instant, Sample, Well};
 use crate::instance::{Api, Interface, Lifecycle};
 use crate::md::GUID;
 use crate::me::{SavedMe, Tail};
-use crate::model::{PlateInputs, SavedModel, MAX_PLATE_ORDER};
+use crate::model::checkpoint::SavedModel;
+use crate::model::plate::{PlateInputs, MAX_PLATE_ORDER};
 
 /// First bytes of every serialized state.
 pub const MAGIC: &[u8; 8] = b"BIFMUST\0";

@@ -6,7 +6,7 @@ mod common;
 use std::ffi::CString;
 
 use bistable_core::{Event, Params, Simulator, Sinusoid, SolverOptions};
-use bistable_impact::exports::*;
+use bistable_impact::exports2::*;
 use bistable_impact::fmi2::*;
 use bistable_impact::md::{var, GUID, VARS};
 use common::Log;

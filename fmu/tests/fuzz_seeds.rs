@@ -8,7 +8,7 @@ use std::ffi::CString;
 use std::path::PathBuf;
 use std::ptr;
 
-use bistable_impact::exports::*;
+use bistable_impact::exports2::*;
 use bistable_impact::fmi2::*;
 use bistable_impact::md::{var, GUID, VARS};
 

@@ -15,6 +15,7 @@ use bistable_core::{Event, SimError, Simulator, Sinusoid};
 
 use crate::cycles::record_cycles;
 use crate::grazing::crossing;
+use crate::numerics::{self, dot, norm, sub};
 use crate::orbit::Orbit;
 use crate::seeds::Seed;
 use crate::Model;
@@ -159,14 +160,6 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-pub(crate) fn dot(a: [f64; 3], b: [f64; 3]) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-pub(crate) fn norm(a: [f64; 3]) -> f64 {
-    dot(a, a).sqrt()
-}
-
 /// Unit null vector of the 2×3 Jacobian, oriented along `along` (or with the sign of `dir` in
 /// Ω when there is no previous tangent).
 fn tangent(jac: [[f64; 3]; 2], along: Option<[f64; 3]>, dir: f64) -> Option<[f64; 3]> {
@@ -186,32 +179,6 @@ fn tangent(jac: [[f64; 3]; 2], along: Option<[f64; 3]>, dir: f64) -> Option<[f64
     Some(t)
 }
 
-/// Solves the 3×3 system `a·x = b` by Gaussian elimination with partial pivoting.
-pub(crate) fn solve3(mut a: [[f64; 3]; 3], mut b: [f64; 3]) -> Option<[f64; 3]> {
-    for col in 0..3 {
-        let piv = (col..3).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col] == 0.0 || !a[piv][col].is_finite() {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        let pivot_row = a[col];
-        for row in col + 1..3 {
-            let f = a[row][col] / pivot_row[col];
-            for (k, entry) in a[row].iter_mut().enumerate().skip(col) {
-                *entry -= f * pivot_row[k];
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = [0.0; 3];
-    for row in (0..3).rev() {
-        let s: f64 = (row + 1..3).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - s) / a[row][row];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
-}
-
 /// Newton on the augmented system from `pred`, with the arclength condition along `t` (the
 /// solution lies in the plane through `pred` normal to `t`, a unit vector in `(x, x', Ω)`).
 /// Returns the converged point, its evaluation and the iterations used.
@@ -221,22 +188,21 @@ pub(crate) fn correct(
     pred: [f64; 3],
     t: [f64; 3],
 ) -> Option<([f64; 3], Eval, u32)> {
-    let mut u = pred;
-    for it in 0..12 {
-        let e = evaluate(model, p, u).ok()?;
-        let scale = u[0].abs().max(u[1].abs()).max(1.0);
-        let res = e.g[0].abs().max(e.g[1].abs());
-        if res <= 1e-11 * scale {
-            return Some((u, e, it));
-        }
-        let arc = dot(t, [u[0] - pred[0], u[1] - pred[1], u[2] - pred[2]]);
-        let d = solve3([e.jac[0], e.jac[1], t], [-e.g[0], -e.g[1], -arc])?;
-        u = [u[0] + d[0], u[1] + d[1], u[2] + d[2]];
-        if u[2] <= 0.0 || u.iter().any(|c| !c.is_finite()) {
-            return None;
-        }
-    }
-    None
+    numerics::correct(
+        pred,
+        t,
+        |u| {
+            let e = evaluate(model, p, u).ok()?;
+            let scale = u[0].abs().max(u[1].abs()).max(1.0);
+            let res = e.g[0].abs().max(e.g[1].abs());
+            if res <= 1e-11 * scale {
+                return Some((e, None));
+            }
+            let lin = ([e.jac[0], e.jac[1], [0.0; 3]], [e.g[0], e.g[1], 0.0]);
+            Some((e, Some(lin)))
+        },
+        |u| u[2] > 0.0,
+    )
 }
 
 fn point(model: &Model, p: u32, u: [f64; 3], e: &Eval) -> Result<ArcPoint, SimError> {
@@ -287,7 +253,7 @@ pub fn trace(
     while out.len() < o.max_points && ds >= ds_min {
         let pred = [u[0] + ds * t[0], u[1] + ds * t[1], u[2] + ds * t[2]];
         let next = correct(model, p, pred, t).and_then(|(un, e, it)| {
-            let step = norm([un[0] - u[0], un[1] - u[1], un[2] - u[2]]);
+            let step = norm(sub(un, u));
             let tn = tangent(e.jac, Some(t), dir)?;
             // A corrector that lands far away, or a tangent that turns back, jumped branches.
             (step <= 2.0 * ds && dot(tn, t) > 0.5).then_some((un, e, it, tn))
@@ -414,20 +380,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn linear_algebra() {
-        let x = solve3(
-            [[0.0, 2.0, 1.0], [1.0, 0.0, 0.0], [3.0, 1.0, 4.0]],
-            [5.0, 1.0, 16.0],
-        )
-        .unwrap();
-        // x = (1, 1, 3).
-        assert!((x[0] - 1.0).abs() < 1e-14 && (x[1] - 1.0).abs() < 1e-14);
-        assert!((x[2] - 3.0).abs() < 1e-14);
-        assert!(solve3(
-            [[1.0, 2.0, 3.0], [2.0, 4.0, 6.0], [0.0, 0.0, 1.0]],
-            [1.0; 3]
-        )
-        .is_none());
+    fn tangent_of_a_jacobian() {
         let t = tangent([[1.0, 0.0, 0.0], [0.0, 1.0, 0.0]], None, -1.0).unwrap();
         assert_eq!(t, [0.0, 0.0, -1.0]);
     }

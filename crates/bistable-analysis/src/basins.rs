@@ -142,11 +142,7 @@ impl Steady {
         if self.at_rest {
             return "rest in well 2".into();
         }
-        let kind = match (self.period, self.chaotic) {
-            (Some(p), _) => format!("P-{p}"),
-            (None, true) => "chaotic".into(),
-            (None, false) => "aperiodic".into(),
-        };
+        let kind = crate::period::label(self.period, self.chaotic);
         match self.well {
             Some(w) if !self.across => format!("{kind} in well {}", w.number()),
             _ => format!("{kind} across the barrier"),

@@ -36,11 +36,12 @@ use std::num::NonZeroU32;
 use bistable_core::shooting::eigenvalues;
 use bistable_core::SimError;
 
-use crate::arclength::{correct, norm, period_map, ArcPoint};
+use crate::arclength::{correct, period_map, ArcPoint};
 use crate::branches::Branches;
 use crate::continuation::Curves;
 use crate::cycles::record_cycles;
 use crate::grazing::{approach, Test, GRAZING_TOL};
+use crate::numerics::{bisect, illinois, norm, sub, Mid};
 use crate::orbit::Orbit;
 use crate::parallel::{self, Threads};
 use crate::progress::{OnProgress, Progress, Stage};
@@ -246,14 +247,14 @@ impl Chord<'_> {
     /// lands further from the prediction than the chord is long (on another part of the
     /// branch). Its `s` is interpolated from theirs.
     fn at(&self, lo: &Solved, hi: &Solved, f: f64) -> Option<Solved> {
-        let d = [0, 1, 2].map(|k| hi.u[k] - lo.u[k]);
+        let d = sub(hi.u, lo.u);
         let len = norm(d);
         if !(len.is_finite() && len > 0.0) {
             return None;
         }
         let pred = [0, 1, 2].map(|k| lo.u[k] + f * d[k]);
         let s = lo.s + f * (hi.s - lo.s);
-        let near = |u: [f64; 3]| norm([0, 1, 2].map(|k| u[k] - pred[k])) <= len;
+        let near = |u: [f64; 3]| norm(sub(u, pred)) <= len;
         correct(self.model, self.period, pred, d.map(|c| c / len))
             .filter(|(u, ..)| near(*u))
             .map(|(u, e, _)| Solved {
@@ -275,74 +276,42 @@ impl Chord<'_> {
 
     /// Bisects between `lo` and `hi` (different impacts or sticking) to [`NONSMOOTH_TOL`];
     /// the final bracket, shorter only as far as the corrector converged.
-    fn bisect(&self, mut lo: Solved, mut hi: Solved) -> (Solved, Solved) {
-        for _ in 0..MAX_SOLVES {
-            if dist(&lo, &hi) <= NONSMOOTH_TOL {
-                break;
-            }
-            let Some(mid) = self.near(&lo, &hi, 0.5) else {
-                break;
-            };
-            if mid.side() == lo.side() {
-                lo = mid;
-            } else {
-                hi = mid;
-            }
-        }
-        (lo, hi)
+    fn bisect(&self, lo: Solved, hi: Solved) -> (Solved, Solved) {
+        bisect(
+            (lo, hi),
+            NONSMOOTH_TOL,
+            MAX_SOLVES,
+            dist,
+            |lo, hi| match self.near(lo, hi, 0.5) {
+                Some(mid) if mid.side() == lo.side() => Mid::Lo(mid),
+                Some(mid) => Mid::Hi(mid),
+                None => Mid::Stop,
+            },
+        )
     }
 
     /// The root of `kind`'s test function between `lo` and `hi` (of opposite signs) by the
     /// Illinois method to [`SMOOTH_TOL`]: the last orbit solved and the length of the final
     /// bracket in `(x, x', Ω)`.
-    fn root(&self, kind: Kind, mut lo: Solved, mut hi: Solved) -> Option<(Solved, f64)> {
+    fn root(&self, kind: Kind, lo: Solved, hi: Solved) -> Option<(Solved, f64)> {
         let f = |p: &Solved| kind.test(p.multipliers).unwrap_or(f64::NAN);
-        let (mut flo, mut fhi) = (f(&lo), f(&hi));
-        let mut best = if flo.abs() <= fhi.abs() { lo } else { hi };
-        // Which end was kept last (−1: lo, 1: hi), for the Illinois halving.
-        let mut kept = 0;
-        for _ in 0..MAX_SOLVES {
-            if dist(&lo, &hi) <= SMOOTH_TOL {
-                break;
-            }
-            let mut g = flo / (flo - fhi);
-            if !(g.is_finite() && g > 0.0 && g < 1.0) {
-                g = 0.5;
-            }
-            let p = self.near(&lo, &hi, g)?;
-            let fp = f(&p);
-            if !fp.is_finite() || p.side() != lo.side() {
-                return None;
-            }
-            best = p;
-            if fp == 0.0 {
-                lo = p;
-                hi = p;
-                break;
-            }
-            if (fp < 0.0) == (flo < 0.0) {
-                lo = p;
-                flo = fp;
-                if kept == -1 {
-                    fhi *= 0.5;
-                }
-                kept = -1;
-            } else {
-                hi = p;
-                fhi = fp;
-                if kept == 1 {
-                    flo *= 0.5;
-                }
-                kept = 1;
-            }
-        }
-        Some((best, dist(&lo, &hi)))
+        illinois(
+            (lo, f(&lo)),
+            (hi, f(&hi)),
+            SMOOTH_TOL,
+            MAX_SOLVES,
+            dist,
+            |lo, hi, g| {
+                let p = self.near(lo, hi, g)?;
+                (p.side() == lo.side()).then(|| (p, f(&p)))
+            },
+        )
     }
 }
 
 /// Distance of two solved orbits in `(x, x', Ω)`.
 fn dist(a: &Solved, b: &Solved) -> f64 {
-    norm([0, 1, 2].map(|k| b.u[k] - a.u[k]))
+    norm(sub(b.u, a.u))
 }
 
 /// Whether a point on the way from `a` to `b` may hold a bifurcation: a change of impacts or
@@ -393,7 +362,7 @@ pub fn between(
     index: usize,
 ) -> Vec<BifurcationPoint> {
     let (ua, ub) = (a.u(), b.u());
-    let len = norm([0, 1, 2].map(|k| ub[k] - ua[k]));
+    let len = norm(sub(ub, ua));
     if !(len.is_finite() && len > 0.0 && changes(a, b)) {
         return Vec::new();
     }

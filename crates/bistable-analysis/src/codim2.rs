@@ -29,6 +29,7 @@ use bistable_core::shooting::eigenvalues;
 
 use crate::arclength::period_map;
 use crate::bifurcations::det_shifted;
+use crate::numerics::{bisect, dot, illinois, norm, solve, sub, Mid};
 use crate::twoparam::{tangent, Atlas, CurveOptions, CurvePoint, System, Value};
 use crate::Model;
 
@@ -118,10 +119,6 @@ fn w_of(c: &CurvePoint) -> [f64; 4] {
     [c.x0, c.v0, c.omega, c.velocity]
 }
 
-fn dot<const N: usize>(a: [f64; N], b: [f64; N]) -> f64 {
-    (0..N).map(|k| a[k] * b[k]).sum()
-}
-
 /// A curve parameterised from one of its points `w`: trial points on the hyperplanes
 /// `t·(u − w) = s`.
 struct Chart<'a> {
@@ -151,7 +148,7 @@ impl<'a> Chart<'a> {
 
     /// `s` of the curve point `u` (on a hyperplane of this chart).
     fn s_of(&self, u: [f64; 4]) -> f64 {
-        dot(self.t, [0, 1, 2, 3].map(|k| u[k] - self.w[k]))
+        dot(self.t, sub(u, self.w))
     }
 }
 
@@ -207,33 +204,19 @@ fn cusp_coefficient(
     a2.is_finite().then_some((a2, q))
 }
 
-/// The root of `f` between `a` and `b` (`f(a)·f(b) < 0`) by the Illinois variant of regula
-/// falsi: the last trial and the final bracket's length (`None` if `f` fails).
-fn illinois(
-    mut f: impl FnMut(f64) -> Option<f64>,
-    (mut a, mut fa): (f64, f64),
-    (mut b, mut fb): (f64, f64),
-) -> Option<(f64, f64)> {
-    for _ in 0..MAX_TRIALS {
-        if (b - a).abs() <= S_TOL {
-            break;
-        }
-        let mut c = (a * fb - b * fa) / (fb - fa);
-        if !(c > a.min(b) && c < a.max(b)) {
-            c = 0.5 * (a + b);
-        }
-        let fc = f(c)?;
-        if fc == 0.0 {
-            return Some((c, 0.0));
-        }
-        if fc * fb < 0.0 {
-            (a, fa) = (b, fb);
-        } else {
-            fa *= 0.5;
-        }
-        (b, fb) = (c, fc);
-    }
-    Some((b, (b - a).abs()))
+/// The root of `f` between the curve parameters of `a` and `b` (`f(a)·f(b) < 0`) by the
+/// Illinois variant of regula falsi to [`S_TOL`]: the last trial and the final bracket's
+/// length (`None` if `f` fails).
+fn root(f: impl Fn(f64) -> Option<f64>, a: (f64, f64), b: (f64, f64)) -> Option<(f64, f64)> {
+    illinois(a, b, S_TOL, MAX_TRIALS, s_len, |&lo, &hi, g| {
+        let s = lo + g * (hi - lo);
+        f(s).map(|v| (s, v))
+    })
+}
+
+/// Length of a bracket in the curve parameter.
+fn s_len(a: &f64, b: &f64) -> f64 {
+    (b - a).abs()
 }
 
 fn located(
@@ -284,7 +267,7 @@ fn sign_changes(sys: &System<'_>, k: usize, curve: &[CurvePoint], out: &mut Vec<
     }
     for j in 0..curve.len().saturating_sub(1) {
         let (w0, w1) = (w_of(&curve[j]), w_of(&curve[j + 1]));
-        let along = [0, 1, 2, 3].map(|i| w1[i] - w0[i]);
+        let along = sub(w1, w0);
         let chart = || Chart::new(sys, w0, along);
         if g[j] * g[j + 1] < 0.0 {
             if let Some(c) = chart() {
@@ -293,7 +276,7 @@ fn sign_changes(sys: &System<'_>, k: usize, curve: &[CurvePoint], out: &mut Vec<
                     c.at(s)
                         .map(|(_, v, _)| other_test(eigenvalues(v.1), sys.sign))
                 };
-                if let Some((s, err)) = illinois(f, (0.0, g[j]), (s1, g[j + 1])) {
+                if let Some((s, err)) = root(f, (0.0, g[j]), (s1, g[j + 1])) {
                     if let Some((w, v, _)) = c.at(s) {
                         out.push(located(PointKind::FoldFlip, k, j, (w, &v), err));
                     }
@@ -308,7 +291,7 @@ fn sign_changes(sys: &System<'_>, k: usize, curve: &[CurvePoint], out: &mut Vec<
                     let (w, v, _) = c.at(s)?;
                     cusp_coefficient(sys, w, v.1, Some(*q0)).map(|(a, _)| a)
                 };
-                if let Some((s, err)) = illinois(f, (0.0, *a0), (s1, *a1)) {
+                if let Some((s, err)) = root(f, (0.0, *a0), (s1, *a1)) {
                     if let Some((w, v, _)) = c.at(s) {
                         out.push(located(PointKind::Cusp, k, j, (w, &v), err));
                     }
@@ -348,10 +331,9 @@ fn grazing_ends(
         let (w, wp) = (w_of(c), w_of(p));
         let Ok(v_end) = sys.value(w) else { continue };
         let side = (v_end.2, v_end.3);
-        let out_of = |a: [f64; 4], b: [f64; 4]| [0, 1, 2, 3].map(|i| a[i] - b[i]);
         let (Some(chart), Some(before)) = (
-            Chart::new(sys, w, out_of(w, wp)),
-            Chart::new(sys, wp, out_of(w, wp)),
+            Chart::new(sys, w, sub(w, wp)),
+            Chart::new(sys, wp, sub(w, wp)),
         ) else {
             continue;
         };
@@ -370,20 +352,20 @@ fn grazing_ends(
             }
             s *= 2.0;
         }
-        let Some(mut hi) = hi else { continue };
+        let Some(hi) = hi else { continue };
         if u[0].abs() <= SECTION_CONTACT {
             continue;
         }
-        for _ in 0..MAX_TRIALS {
-            if hi - lo <= S_TOL {
-                break;
-            }
+        let (lo, hi) = bisect((lo, hi), S_TOL, MAX_TRIALS, s_len, |&lo, &hi| {
             let mid = 0.5 * (lo + hi);
             match good(mid) {
-                Some(g) => (lo, u, v_u) = (mid, g.0, g.1),
-                None => hi = mid,
+                Some(g) => {
+                    (u, v_u) = (g.0, g.1);
+                    Mid::Lo(mid)
+                }
+                None => Mid::Hi(mid),
             }
-        }
+        });
         // The impacts along the tangent line from u.
         let impacts_at = |sigma: f64| {
             let b = [0, 1, 2, 3].map(|i| u[i] + sigma * chart.t[i]);
@@ -404,30 +386,22 @@ fn grazing_ends(
             }
             sigma *= 2.0;
         }
-        let Some((mut far, mut beyond)) = far else {
+        let Some((far, mut beyond)) = far else {
             continue;
         };
-        for _ in 0..MAX_TRIALS {
-            if far - same <= S_TOL {
-                break;
-            }
+        let (same, far) = bisect((same, far), S_TOL, MAX_TRIALS, s_len, |&same, &far| {
             let mid = 0.5 * (same + far);
             match impacts_at(mid) {
-                Some(r) if r == side => same = mid,
-                Some((impacts, sticks)) if sticks == side.1 => (far, beyond) = (mid, impacts),
-                _ => break,
+                Some(r) if r == side => Mid::Lo(mid),
+                Some((impacts, sticks)) if sticks == side.1 => {
+                    beyond = impacts;
+                    Mid::Hi(mid)
+                }
+                _ => Mid::Stop,
             }
-        }
+        });
         let at = [0, 1, 2, 3].map(|i| u[i] + same * chart.t[i]);
-        let kappa = out_of(chart.t, before.t)
-            .iter()
-            .map(|d| d * d)
-            .sum::<f64>()
-            .sqrt()
-            / chart
-                .s_of(w)
-                .abs()
-                .max(dot(out_of(w, wp), out_of(w, wp)).sqrt());
+        let kappa = norm(sub(chart.t, before.t)) / chart.s_of(w).abs().max(norm(sub(w, wp)));
         let error = (hi - lo) + (far - same) + kappa * far * far;
         let mut q = located(PointKind::ResonantGrazing, k, end, (at, &v_u), error);
         q.impacts_beyond = beyond;
@@ -470,12 +444,7 @@ fn refine_crossing(
         let (da, db) = (velocity_in_plane(ca, ta), velocity_in_plane(cb, tb));
         let r = [wa[2] - wb[2], wa[3] - wb[3]];
         // da·δa − db·δb = −r
-        let det = -da[0] * db[1] + db[0] * da[1];
-        if det == 0.0 || !det.is_finite() {
-            return None;
-        }
-        let step_a = (-r[0] * -db[1] + db[0] * -r[1]) / det;
-        let step_b = (da[0] * -r[1] + r[0] * da[1]) / det;
+        let [step_a, step_b] = solve([[da[0], -db[0]], [da[1], -db[1]]], [-r[0], -r[1]])?;
         sa += step_a;
         sb += step_b;
         let step = step_a.abs().max(step_b.abs());
@@ -513,7 +482,7 @@ fn crossings(model: &Model, atlas: &Atlas, out: &mut Vec<Codim2Point>) {
                     };
                     let chart = |sys, c: &[CurvePoint], k: usize| {
                         let (w0, w1) = (w_of(&c[k]), w_of(&c[k + 1]));
-                        let ch = Chart::new(sys, w0, [0, 1, 2, 3].map(|m| w1[m] - w0[m]))?;
+                        let ch = Chart::new(sys, w0, sub(w1, w0))?;
                         let s1 = ch.s_of(w1);
                         Some((ch, s1))
                     };
@@ -537,11 +506,7 @@ fn crossings(model: &Model, atlas: &Atlas, out: &mut Vec<Codim2Point>) {
                             let (p0, p1) = (&ci[a], &ci[a + 1]);
                             let len = |c: &[CurvePoint], k: usize| {
                                 let (u, v) = (w_of(&c[k]), w_of(&c[k + 1]));
-                                dot(
-                                    [0, 1, 2, 3].map(|m| u[m] - v[m]),
-                                    [0, 1, 2, 3].map(|m| u[m] - v[m]),
-                                )
-                                .sqrt()
+                                norm(sub(u, v))
                             };
                             Codim2Point {
                                 kind: PointKind::Crossing,
@@ -589,13 +554,6 @@ pub fn points(model: &Model, atlas: &Atlas, o: CurveOptions) -> Vec<Codim2Point>
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    #[test]
-    fn illinois_finds_a_root_to_the_bracket() {
-        let (s, err) = illinois(|s| Some(s * s - 2.0), (0.0, -2.0), (3.0, 7.0)).unwrap();
-        assert!(err <= S_TOL, "{err}");
-        assert!((s - 2.0_f64.sqrt()).abs() <= S_TOL, "{s}");
-    }
 
     #[test]
     fn segments_intersect_once() {

@@ -21,6 +21,7 @@ use bistable_core::shooting::eigenvalues;
 use bistable_core::{Event, SimError, Simulator};
 
 use crate::arclength::{correct, Eval};
+use crate::numerics::{bisect, Mid};
 use crate::Model;
 
 /// The approach stops once the bracket in Ω is this short.
@@ -29,7 +30,7 @@ pub const GRAZING_TOL: f64 = 1e-10;
 /// of the gap.
 const GAP_SAMPLES: u32 = 256;
 /// Bisection steps refining the time of a gap minimum (the interval shrinks by `2^-60`).
-const REFINE: u32 = 60;
+const REFINE: usize = 60;
 /// Most orbits solved on one approach.
 const MAX_SOLVES: usize = 60;
 /// Largest first step in Ω from the starting orbit.
@@ -109,18 +110,29 @@ fn gap_minimum(from: &Simulator, to: f64) -> Result<f64, SimError> {
         s.advance_to(t, &mut |_: &Event| {})?;
         Ok(s)
     };
-    let (mut lo, mut hi) = (from.time(), to);
-    for _ in 0..REFINE {
-        let mid = 0.5 * (lo + hi);
-        if !(mid > lo && mid < hi) {
-            break;
-        }
-        let st = at(mid)?.state();
-        if st.v - st.zdot < 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
+    let mut failed = None;
+    let (lo, hi) = bisect(
+        (from.time(), to),
+        0.0,
+        REFINE,
+        |lo, hi| hi - lo,
+        |&lo, &hi| {
+            let mid = 0.5 * (lo + hi);
+            if !(mid > lo && mid < hi) {
+                return Mid::Stop;
+            }
+            match at(mid).map(|s| s.state()) {
+                Ok(st) if st.v - st.zdot < 0.0 => Mid::Lo(mid),
+                Ok(_) => Mid::Hi(mid),
+                Err(e) => {
+                    failed = Some(e);
+                    Mid::Stop
+                }
+            }
+        },
+    );
+    if let Some(e) = failed {
+        return Err(e);
     }
     Ok(at(0.5 * (lo + hi))?.state().gap())
 }

@@ -32,6 +32,26 @@ pub fn distinct(values: &[f64], tol: f64) -> usize {
         + usize::from(!v.is_empty())
 }
 
+/// A steady state's period as the analyses write it: `P-n` for period `n`, else `chaotic` or
+/// `aperiodic` (in the map's outcomes, the basins' attractor labels and the sensitivity
+/// test's outcome keys).
+pub fn label(period: Option<u32>, chaotic: bool) -> String {
+    match (period, chaotic) {
+        (Some(p), _) => format!("P-{p}"),
+        (None, true) => "chaotic".into(),
+        (None, false) => "aperiodic".into(),
+    }
+}
+
+/// The period and chaos verdict of a [`label`] (`None` for any other text).
+pub fn parse_label(text: &str) -> Option<(Option<u32>, bool)> {
+    match text {
+        "chaotic" => Some((None, true)),
+        "aperiodic" => Some((None, false)),
+        p => Some((Some(p.strip_prefix("P-")?.parse().ok()?), false)),
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -46,5 +66,23 @@ mod tests {
         assert_eq!(detect_period(&drift, 16, 1e-9), None);
         assert_eq!(distinct(&[0.1, 0.1 + 1e-12, 0.2, 0.3, 0.2], 1e-9), 3);
         assert_eq!(distinct(&[], 1e-9), 0);
+    }
+
+    #[test]
+    fn labels_read_back() {
+        for (period, chaotic) in [
+            (Some(1), false),
+            (Some(12), false),
+            (None, true),
+            (None, false),
+        ] {
+            assert_eq!(
+                parse_label(&label(period, chaotic)),
+                Some((period, chaotic))
+            );
+        }
+        assert_eq!(label(Some(3), false), "P-3");
+        assert_eq!(parse_label("P-x"), None);
+        assert_eq!(parse_label("periodic"), None);
     }
 }

@@ -4,6 +4,7 @@
 
 use bistable_core::{Classification, Well};
 
+use crate::period;
 use crate::sensitivity::Sensitivity;
 use crate::sweep::Classified;
 
@@ -86,11 +87,7 @@ impl OutcomeShare {
     /// `class:period:well` (period `P-n`, `chaotic` or `aperiodic`; well `1`, `2` or `-`), the
     /// key of [`crate::sensitivity::Outcome::key`].
     pub fn key(&self) -> String {
-        let period = match (self.period, self.chaotic) {
-            (Some(p), _) => format!("P-{p}"),
-            (None, true) => "chaotic".into(),
-            (None, false) => "aperiodic".into(),
-        };
+        let period = period::label(self.period, self.chaotic);
         let well = self.final_well.map_or("-".to_string(), |w| w.to_string());
         format!("{}:{period}:{well}", self.class)
     }
@@ -140,18 +137,7 @@ pub fn parse_outcomes(text: &str, runs: u32) -> Result<Vec<OutcomeShare>, String
             if !CLASSES.contains(&class) {
                 return Err(bad());
             }
-            let (period, chaotic) = match period {
-                "chaotic" => (None, true),
-                "aperiodic" => (None, false),
-                p => (
-                    Some(
-                        p.strip_prefix("P-")
-                            .and_then(|p| p.parse().ok())
-                            .ok_or_else(bad)?,
-                    ),
-                    false,
-                ),
-            };
+            let (period, chaotic) = period::parse_label(period).ok_or_else(bad)?;
             let final_well = match well {
                 "-" => None,
                 "1" => Some(1),

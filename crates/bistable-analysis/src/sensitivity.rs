@@ -27,6 +27,7 @@ use bistable_core::{
 };
 
 use crate::ensemble::{run_alone, Run, Task};
+use crate::period;
 use crate::Model;
 
 /// Settings of the sensitivity test.
@@ -143,11 +144,7 @@ impl Outcome {
     /// `class:period:well`, period `P-n`, `chaotic` or `aperiodic`, well `1`, `2` or `-`
     /// (e.g. `transient_interwell:P-1:2`).
     pub fn key(&self) -> String {
-        let period = match (self.period, self.chaotic) {
-            (Some(p), _) => format!("P-{p}"),
-            (None, true) => "chaotic".into(),
-            (None, false) => "aperiodic".into(),
-        };
+        let period = period::label(self.period, self.chaotic);
         let well = self
             .final_well
             .map_or("-".to_string(), |w| w.number().to_string());

@@ -14,6 +14,7 @@ use bistable_core::SimError;
 
 use crate::arclength::period_map;
 use crate::bifurcations::{BifurcationPoint, Kind};
+use crate::numerics::{self, dot, norm, solve, sub};
 use crate::Model;
 
 /// Relative step of the central differences.
@@ -163,57 +164,31 @@ impl<'a> System<'a> {
         pred: [f64; 4],
         t: [f64; 4],
     ) -> Option<([f64; 4], Value, [[f64; 4]; 3])> {
-        let mut w = pred;
-        for _ in 0..12 {
-            let (f, jac, v) = self.jacobian(w).ok()?;
-            if f.iter().all(|c| c.abs() <= RESIDUAL) {
-                return Some((w, v, jac));
-            }
-            let arc: f64 = (0..4).map(|k| t[k] * (w[k] - pred[k])).sum();
-            let d = solve4([jac[0], jac[1], jac[2], t], [-f[0], -f[1], -f[2], -arc])?;
-            for k in 0..4 {
-                w[k] += d[k];
-            }
-            if w[2] <= 0.0 || w[3] < 0.0 || w.iter().any(|c| !c.is_finite()) {
-                return None;
-            }
-        }
-        None
+        numerics::correct(
+            pred,
+            t,
+            |w| {
+                let (f, jac, v) = self.jacobian(w).ok()?;
+                if f.iter().all(|c| c.abs() <= RESIDUAL) {
+                    return Some(((v, jac), None));
+                }
+                Some((
+                    (v, jac),
+                    Some(([jac[0], jac[1], jac[2], [0.0; 4]], [f[0], f[1], f[2], 0.0])),
+                ))
+            },
+            |w| w[2] > 0.0 && w[3] >= 0.0,
+        )
+        .map(|(w, (v, jac), _)| (w, v, jac))
     }
 }
 
 /// Unit null vector of the 3×4 Jacobian, oriented along `along` (its product with it
 /// positive).
 pub(crate) fn tangent(jac: [[f64; 4]; 3], along: [f64; 4]) -> Option<[f64; 4]> {
-    let t = solve4([jac[0], jac[1], jac[2], along], [0.0, 0.0, 0.0, 1.0])?;
-    let n = t.iter().map(|c| c * c).sum::<f64>().sqrt();
+    let t = solve([jac[0], jac[1], jac[2], along], [0.0, 0.0, 0.0, 1.0])?;
+    let n = norm(t);
     (n.is_finite() && n > 0.0).then(|| t.map(|c| c / n))
-}
-
-/// Solves the 4×4 system `a·x = b` by Gaussian elimination with partial pivoting.
-fn solve4(mut a: [[f64; 4]; 4], mut b: [f64; 4]) -> Option<[f64; 4]> {
-    for col in 0..4 {
-        let piv = (col..4).max_by(|&i, &j| a[i][col].abs().total_cmp(&a[j][col].abs()))?;
-        if a[piv][col] == 0.0 || !a[piv][col].is_finite() {
-            return None;
-        }
-        a.swap(col, piv);
-        b.swap(col, piv);
-        let pivot_row = a[col];
-        for row in col + 1..4 {
-            let f = a[row][col] / pivot_row[col];
-            for (k, entry) in a[row].iter_mut().enumerate().skip(col) {
-                *entry -= f * pivot_row[k];
-            }
-            b[row] -= f * b[col];
-        }
-    }
-    let mut x = [0.0; 4];
-    for row in (0..4).rev() {
-        let s: f64 = (row + 1..4).map(|k| a[row][k] * x[k]).sum();
-        x[row] = (b[row] - s) / a[row][row];
-    }
-    x.iter().all(|v| v.is_finite()).then_some(x)
 }
 
 fn curve_point(w: [f64; 4], v: &Value) -> CurvePoint {
@@ -257,9 +232,9 @@ pub fn continue_point(
         while pts.len() < o.max_points && ds >= 1e-4 * o.ds_max {
             let pred = [0, 1, 2, 3].map(|k| w[k] + ds * t[k]);
             let next = sys.correct(pred, t).and_then(|(wn, v, jac)| {
-                let step = (0..4).map(|k| (wn[k] - w[k]).powi(2)).sum::<f64>().sqrt();
+                let step = norm(sub(wn, w));
                 let tn = tangent(jac, t)?;
-                let turn: f64 = (0..4).map(|k| tn[k] * t[k]).sum();
+                let turn = dot(tn, t);
                 (step <= 2.0 * ds && turn > 0.5 && (v.2, v.3) == side).then_some((wn, v, tn))
             });
             match next {
@@ -347,17 +322,7 @@ mod tests {
     use super::*;
 
     #[test]
-    fn four_by_four_solve() {
-        let a = [
-            [2.0, 0.0, 0.0, 1.0],
-            [0.0, 3.0, 0.0, 0.0],
-            [1.0, 0.0, 1.0, 0.0],
-            [0.0, 0.0, 0.0, 4.0],
-        ];
-        let x = solve4(a, [3.0, 3.0, 2.0, 4.0]).unwrap();
-        for (got, want) in x.iter().zip([1.0, 1.0, 1.0, 1.0]) {
-            assert!((got - want).abs() < 1e-15, "{x:?}");
-        }
+    fn tangent_of_a_jacobian() {
         let t = tangent(
             [
                 [1.0, 0.0, 0.0, 0.0],

@@ -10,10 +10,8 @@ use bistable_analysis::bifurcations::Kind;
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::twoparam::{trace_all, CurveOptions};
 use bistable_analysis::Model;
-use bistable_core::{
-    continue_in_omega, ClassifyOptions, Params, ShootOptions, SimError, SolverOptions, Width,
-};
-use common::{model_at, p1_located};
+use bistable_core::{ClassifyOptions, Params, ShootOptions, SimError, SolverOptions, Width};
+use common::{continue_in_omega, model_at, p1_located};
 
 /// A basin attractor's anchor (its cycle's section point at plate phase 0) and the fixed
 /// point of the orbit continued there agree to this (max norm, units of Δx and ω0·Δx): the

@@ -13,8 +13,8 @@ use bistable_analysis::continuation::{continue_orbits, Curves, Method};
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::twoparam::{continue_point, trace_all, Atlas, CurveOptions};
 use bistable_analysis::Model;
-use bistable_core::{continue_in_omega, Params, ShootOptions, SimError, SolverOptions, Width};
-use common::{model_at, p1_located};
+use bistable_core::{Params, ShootOptions, SimError, SolverOptions, Width};
+use common::{continue_in_omega, model_at, p1_located};
 
 /// Agreement in Ω of a curve point and the point located at its V in one parameter.
 const SAME_OMEGA: f64 = 1e-8;

@@ -976,12 +976,7 @@ fn draw_line(
         )?;
         let xs: Vec<f64> = points.iter().map(|(p, _)| x_of(p)).collect();
         for b in orbits {
-            crate::branches::draw(
-                &mut lower,
-                b,
-                &xs,
-                crate::bifurcation::period_colour(b.period),
-            )?;
+            crate::branches::draw(&mut lower, b, &xs, crate::diagram::period_colour(b.period))?;
         }
         Ok(())
     })

@@ -23,7 +23,7 @@
 //! - `branches.rs`: periodic-orbit branches as CSV rows and curves on a chart;
 //! - `bifurcations.rs`: bifurcation points located on the branches as CSV rows, JSON and
 //!   markers;
-//! - `bifurcation.rs`: `bistable bifurcation`;
+//! - `diagram.rs`: `bistable bifurcation` (the diagram of Fig. 6/8);
 //! - `orbit.rs`: `bistable orbit`;
 //! - `atlas.rs`: `bistable atlas`;
 //! - `thresholds.rs`: `bistable thresholds`;
@@ -41,13 +41,13 @@
 mod atlas;
 mod atlas_points;
 mod basins;
-mod bifurcation;
 mod bifurcations;
 mod branches;
 mod classify;
 mod coexistence;
 mod common;
 mod decision;
+mod diagram;
 mod energy_map;
 mod error;
 mod grid;
@@ -119,8 +119,8 @@ enum Command {
 
     /// Bifurcation diagram (Fig. 6/8): max x per shaker cycle and impact phases against Ω or
     /// V, with periodic-orbit branches.
-    #[command(long_about = bifurcation::LONG_ABOUT, after_help = bifurcation::AFTER_HELP)]
-    Bifurcation(bifurcation::BifurcationArgs),
+    #[command(long_about = diagram::LONG_ABOUT, after_help = diagram::AFTER_HELP)]
+    Bifurcation(diagram::BifurcationArgs),
 
     /// Periodic orbit by shooting: fixed point, Floquet multipliers, stability; continuation
     /// in Ω (Fig. 11a).
@@ -160,7 +160,7 @@ fn main() -> ExitCode {
         Command::Map(args) => map::run(args),
         Command::Basins(args) => basins::run(args),
         Command::Coexistence(args) => coexistence::run(args),
-        Command::Bifurcation(args) => bifurcation::run(args),
+        Command::Bifurcation(args) => diagram::run(args),
         Command::Orbit(args) => orbit::run(args),
         Command::Atlas(args) => atlas::run(args),
         Command::Thresholds(args) => thresholds::run(args),

@@ -9,6 +9,7 @@ use clap::{ArgGroup, Args};
 use plotters::prelude::*;
 use serde::Serialize;
 
+use bistable_analysis::period;
 use bistable_analysis::sweep::classify_points_with;
 use bistable_analysis::Model;
 use bistable_core::ClassifyOptions;
@@ -304,8 +305,8 @@ impl Category {
                 if s == Snaps::One { "" } else { "s" },
                 period_label(p)
             ),
-            Category::Chaotic => "chaotic".into(),
-            Category::Aperiodic => "aperiodic, not chaotic".into(),
+            Category::Chaotic => period::label(None, true),
+            Category::Aperiodic => format!("{}, not chaotic", period::label(None, false)),
             Category::AtRestInWellTwo => "at rest in well 2".into(),
             Category::Failed => "failed".into(),
         }
@@ -329,11 +330,12 @@ impl Category {
     }
 }
 
+/// `P-1` to `P-6`, and `P-6+` for the longer periods (7).
 fn period_label(p: u32) -> String {
     if p >= 7 {
-        "P-6+".into()
+        format!("{}+", period::label(Some(6), false))
     } else {
-        format!("P-{p}")
+        period::label(Some(p), false)
     }
 }
 

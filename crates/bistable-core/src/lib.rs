@@ -4,6 +4,25 @@
 //! Everything here is nondimensional (`model.md` Sec. 2): time `τ = ω0 t`, lengths in units of
 //! the well distance `Δx`, energies in `k0 Δx²`. The crate does no I/O.
 //!
+//! Where to start:
+//!
+//! - [`Params`] (`ζ`, `e`) and [`SolverOptions`] (tolerance, chatter rule), validated;
+//!   [`Sinusoid`] and [`PlateMotion`] (the plate; also polynomial pieces from outside,
+//!   [`sampled`] plates rebuilt from samples, [`ramp`]ed set-point changes).
+//! - [`Simulator`]: the event-driven integrator (Taylor steps, every impact located as a
+//!   polynomial root); it reports [`Event`]s (impacts, sticking, snap-throughs) to an
+//!   [`Observer`], gives the [`State`] between events, and saves and restores itself as a
+//!   [`Checkpoint`] ([`codec`] is its byte format).
+//! - [`Batch`] and [`LaneRun`]: many trajectories at once in SIMD lanes, bit-identical to one at
+//!   a time ([`simd`] selects or forces the instruction set).
+//! - [`classify()`]: the response classes of the paper's map (Sec. 3.4, Fig. 9);
+//!   [`shoot`]: periodic orbits by shooting, with Floquet multipliers.
+//! - [`units`]: SI conversions (used by the FMU); [`potential`]: the bistable potential;
+//!   [`audit`]: a check that no impact was missed.
+//!
+//! The analyses of the paper (maps, basins, bifurcations, continuation) are in
+//! `bistable-analysis`; the CLI, Python package and FMU are thin front ends over both.
+//!
 //! ```
 //! use bistable_core::{Params, Simulator, Sinusoid, SolverOptions, Event};
 //! let plate = Sinusoid::new(1.75, 0.07).unwrap();
@@ -54,7 +73,7 @@ pub use ramp::SetpointRamp;
 pub use sampled::{PieceMemo, Sample, SampleHistory};
 pub use shaker::{PlateMotion, PolyPiece, Sinusoid};
 pub use shaker::{MAX_VELOCITY, OMEGA_RANGE};
-pub use shooting::{continue_in_omega, shoot, PeriodicOrbit, ShootError, ShootOptions};
+pub use shooting::{shoot, PeriodicOrbit, ShootError, ShootOptions};
 pub use simd::SimdPath;
 pub use simulator::{
     Flights, Observer, SimError, Simulator, State, Stats, StepKey, StepView, FLIGHT_LANES,

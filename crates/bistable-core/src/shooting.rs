@@ -269,34 +269,6 @@ fn finish(
     })
 }
 
-/// Natural continuation of a branch in `Ω`: each orbit seeds the next. Stops at the first
-/// failure (fold, loss of convergence) and returns the orbits found with the error.
-pub fn continue_in_omega(
-    params: Params,
-    velocity: f64,
-    omegas: &[f64],
-    opts: SolverOptions,
-    periods: u32,
-    guess: (f64, f64),
-    so: ShootOptions,
-) -> (Vec<PeriodicOrbit>, Option<(f64, ShootError)>) {
-    let mut out = Vec::new();
-    let mut g = guess;
-    for &omega in omegas {
-        let orbit = Sinusoid::new(omega, velocity)
-            .map_err(ShootError::from)
-            .and_then(|plate| shoot(params, plate, opts, periods, g, so));
-        match orbit {
-            Ok(o) => {
-                g = (o.x0, o.v0);
-                out.push(o);
-            }
-            Err(e) => return (out, Some((omega, e))),
-        }
-    }
-    (out, None)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -6,7 +6,7 @@ use std::time::Instant as WallClock;
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyList};
 
-use bistable_analysis::bifurcation::{compute, BifurcationOptions};
+use bistable_analysis::diagram::{compute, BifurcationOptions};
 use bistable_analysis::Model;
 
 use crate::common::{

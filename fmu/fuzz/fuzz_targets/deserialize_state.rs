@@ -11,7 +11,7 @@
 #![no_main]
 
 use bistable_fmu_fuzz::{fix_up, same, status, Fmu};
-use bistable_impact::exports::*;
+use bistable_impact::exports2::*;
 use bistable_impact::fmi2::*;
 use bistable_impact::instance::Lifecycle;
 use bistable_impact::md::var;

@@ -9,7 +9,7 @@
 #![no_main]
 
 use bistable_fmu_fuzz::{same, status, Fmu};
-use bistable_impact::exports::*;
+use bistable_impact::exports2::*;
 use bistable_impact::fmi2::*;
 use bistable_impact::md::{var, VARS};
 use libfuzzer_sys::arbitrary::{self, Arbitrary};

@@ -4,7 +4,7 @@
 use std::ffi::{c_char, c_void, CStr, CString};
 use std::sync::Mutex;
 
-use bistable_impact::exports::fmi2Instantiate;
+use bistable_impact::exports2::fmi2Instantiate;
 use bistable_impact::fmi2::*;
 
 /// Messages logged by one instance: `(status, category, message)`.

@@ -1,7 +1,7 @@
 //! PNG figures: the helpers every command's drawing uses (the PNG file and its font, a header
 //! with title, subtitle and legend, charts and axes, value ranges, colour bars, lines and
 //! colours). Each command draws its own figures: `simulate`'s are in [`simulate`], the others'
-//! in the command's module (`map.rs`, `basins.rs`, `bifurcation.rs`, …).
+//! in the command's module (`map.rs`, `basins.rs`, `diagram.rs`, …).
 //!
 //! Text is drawn with ab_glyph from a TrueType file found at run time ([`ensure_font`]), so no
 //! fontconfig is needed: DejaVu Sans (Debian's `fonts-dejavu-core`) or `$BISTABLE_FONT`.

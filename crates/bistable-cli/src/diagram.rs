@@ -9,10 +9,10 @@ use clap::{ArgGroup, Args, ValueEnum};
 use plotters::prelude::*;
 use serde::Serialize;
 
-use bistable_analysis::bifurcation::{self, Bifurcation, BifurcationOptions};
 use bistable_analysis::bifurcations::{locate, BifurcationPoint, Branch};
 use bistable_analysis::branches::Branches;
 use bistable_analysis::cycles::Cycles;
+use bistable_analysis::diagram::{self, Bifurcation, BifurcationOptions};
 use bistable_analysis::Model;
 
 use crate::bifurcations;
@@ -215,7 +215,7 @@ pub fn run(args: &BifurcationArgs) -> Result<(), CliError> {
         width,
     };
     let mut bars = StageBars::new("");
-    let data = bifurcation::compute(&models, &options, threads, &mut |p| bars.report(p))?;
+    let data = diagram::compute(&models, &options, threads, &mut |p| bars.report(p))?;
     let summaries = data.point_summaries(&models, args.record);
     let Bifurcation {
         points, branches, ..
