@@ -16,6 +16,7 @@ const DOCUMENTED: &[&str] = &[
     "classify",
     "map",
     "basins",
+    "coexistence",
     "bifurcation",
     "orbit",
     "orbit --continue-omega",
