@@ -18,7 +18,7 @@ ros-build:
 
 ## The unit tests our RustDDS patches add to its writer (GAPs, history, discovery data).
 test-ros-patches: setup
-	$(CARGO) test --manifest-path .deps/rustdds/Cargo.toml --release --lib --quiet rtps::writer::tests::repair
+	$(CARGO) test --manifest-path .deps/rustdds/Cargo.toml --lib --quiet rtps::writer::tests::repair
 
 test-ros: ros-setup ros-build test-ros-patches
 	bash ros/run-tests.sh

@@ -29,12 +29,23 @@ def test_colcon_build_into_a_fresh_install_tree():
         (WS / "src/bistable-impact").symlink_to(ROOT)
     # A fresh install tree at a fixed place (CMake keeps the install prefix in its cache).
     shutil.rmtree(WS / "install", ignore_errors=True)
+    # colcon-ros-cargo has cargo build into the package's build base (--target-dir). That base
+    # is the repository's target directory, where `make ros-build` has built the same package
+    # in release, so the release build below (as ROS users build a node to run it) reuses that
+    # build instead of compiling every crate again; colcon, cargo-ament-build and the install
+    # tree are exercised as without the link.
+    base = WS / "build/bistable_impact_node"
+    if not base.is_symlink():
+        shutil.rmtree(base, ignore_errors=True)
+        base.parent.mkdir(parents=True, exist_ok=True)
+        base.symlink_to(ROOT / "target")
     ws = WS
     env = dict(os.environ, PATH=f"{TOOLS}:{VENV / 'bin'}:{os.environ['PATH']}", AMENT_PREFIX_PATH=str(VENV),
                CMAKE_PREFIX_PATH=str(VENV))
     r = subprocess.run([str(VENV / "bin/colcon"), "build", "--base-paths", "src/bistable-impact/ros",
                         "--event-handlers", "console_direct-", "--cmake-args",
-                        f"-DPython3_EXECUTABLE={VENV / 'bin/python'}", "-DBUILD_TESTING=OFF"],
+                        f"-DPython3_EXECUTABLE={VENV / 'bin/python'}", "-DBUILD_TESTING=OFF",
+                        "--cargo-args", " --release"],
                        cwd=WS, env=env, capture_output=True, text=True, timeout=1200)
     assert r.returncode == 0, (r.stdout[-3000:], r.stderr[-3000:])
     for pkg in ["bistable_impact_msgs", "bistable_impact_node"]:

@@ -7,8 +7,8 @@
 //! **Starts.** `K` starts `(x0, x0')` at `τ = 0` with the plate at phase 0 (where it is at
 //! `z = 0`, moving up at `V`), in a box [`StartBox`]: a grid of `nx × nv` starts or `K` seeded
 //! uniform random starts ([`Sampling`]). The same starts serve every point. The paper's own
-//! start (at rest at `x = 0`) is decided too, in full, but is not one of the `K`: it tells
-//! which attractor the paper's map reports (`bistable map` starts there).
+//! start (at rest at `x = 0`) is decided too, in full and with `bistable map`'s sensitivity
+//! test, but is not one of the `K`: it tells which attractor the paper's map reports.
 //!
 //! **Fractions.** The basin fraction `f = n / K` of an attractor reached by `n` of the `K`
 //! starts estimates the share of the box's area (the probability that a start drawn uniformly
@@ -43,6 +43,7 @@ use crate::recurrence::{
     RecurrenceSpec,
 };
 use crate::seeds::Seed;
+use crate::sensitivity::{PointTest, SensitivityOptions};
 use crate::Model;
 
 /// At most this many starts per point.
@@ -239,8 +240,12 @@ pub struct PointCoexistence {
     pub starts: usize,
     /// The attractors, largest basin first (ties: first reached in the order of the starts).
     pub attractors: Vec<Coexisting>,
-    /// The cell of the paper's start (at rest at `x = 0`, plate phase 0), decided in full.
+    /// The cell of the paper's start (at rest at `x = 0`, plate phase 0), decided in full with
+    /// `bistable map`'s sensitivity test: the outcome `bistable map` reports (the most frequent
+    /// one where rounding decides).
     pub paper: Cell,
+    /// Whether rounding decides the paper start's outcome (`bistable map`'s `sensitive`).
+    pub paper_sensitive: bool,
     /// The attractor (index into `attractors`) that the paper's start reaches.
     pub paper_attractor: usize,
 }
@@ -263,6 +268,8 @@ pub struct CoexistenceOptions {
     pub classify: ClassifyOptions,
     /// By recurrence (first round [`FIRST_ROUND`]) or in full.
     pub decision: Decision,
+    /// The sensitivity test of the paper's start (`bistable map`'s by default).
+    pub sensitivity: SensitivityOptions,
 }
 
 impl Default for CoexistenceOptions {
@@ -277,6 +284,7 @@ impl Default for CoexistenceOptions {
                 first_round: FIRST_ROUND,
                 ..RecurrenceOptions::default()
             }),
+            sensitivity: SensitivityOptions::default(),
         }
     }
 }
@@ -295,9 +303,7 @@ pub fn coexistence<E>(
     width: Width,
     done: impl FnMut(usize, Result<PointCoexistence, SimError>) -> Result<(), E>,
 ) -> Result<(), E> {
-    let mut starts = vec![(0.0, 0.0)];
-    starts.extend(options.starts.points());
-    let starts: Arc<[(f64, f64)]> = starts.into();
+    let starts: Arc<[(f64, f64)]> = options.starts.points().into();
     ensemble::run(
         points,
         threads,
@@ -307,21 +313,22 @@ pub fn coexistence<E>(
     )
 }
 
-/// The runs of a point: its starts, watched for the known attractors, and probes.
+/// The runs of a point: its starts, watched for the known attractors, and plain
+/// classification runs (probes, the paper's start and its sensitivity repeats).
 #[derive(Clone)]
 enum PointRun {
     Start(RecurrenceSpec),
-    Probe(Run),
+    Plain(Run),
 }
 
 enum PointLane {
     Start(RecurrenceRun),
-    Probe(ClassifyRun),
+    Plain(ClassifyRun),
 }
 
 enum PointReached {
     Start(Reached),
-    Probe(Classification),
+    Plain(Classification),
 }
 
 impl LaneRun for PointLane {
@@ -330,21 +337,21 @@ impl LaneRun for PointLane {
     fn target(&self) -> Instant {
         match self {
             PointLane::Start(r) => r.target(),
-            PointLane::Probe(r) => r.target(),
+            PointLane::Plain(r) => r.target(),
         }
     }
 
     fn event(&mut self, e: &Event) {
         match self {
             PointLane::Start(r) => r.event(e),
-            PointLane::Probe(r) => r.event(e),
+            PointLane::Plain(r) => r.event(e),
         }
     }
 
     fn reached(&mut self, sim: &mut Simulator) -> Result<Option<PointReached>, SimError> {
         Ok(match self {
             PointLane::Start(r) => r.reached(sim)?.map(PointReached::Start),
-            PointLane::Probe(r) => r.reached(sim)?.map(PointReached::Probe),
+            PointLane::Plain(r) => r.reached(sim)?.map(PointReached::Plain),
         })
     }
 }
@@ -355,7 +362,7 @@ impl RunSpec for PointRun {
     fn setting(&self) -> (Params, SolverOptions) {
         match self {
             PointRun::Start(s) => s.setting(),
-            PointRun::Probe(r) => r.setting(),
+            PointRun::Plain(r) => r.setting(),
         }
     }
 
@@ -365,9 +372,9 @@ impl RunSpec for PointRun {
                 let (r, sim) = s.begin()?;
                 (PointLane::Start(r), sim)
             }
-            PointRun::Probe(p) => {
+            PointRun::Plain(p) => {
                 let (r, sim) = p.begin()?;
-                (PointLane::Probe(r), sim)
+                (PointLane::Plain(r), sim)
             }
         })
     }
@@ -375,10 +382,12 @@ impl RunSpec for PointRun {
 
 /// What a point's run was asked for.
 enum Role {
-    /// Start `i` (0: the paper's).
+    /// Start `i` of the box.
     Start(usize),
     /// Probe `n` of the plan.
     Probe(usize),
+    /// Run `j` of the paper start's sensitivity test.
+    Paper(usize),
 }
 
 /// One point: its starts in rounds, the table of known attractors, the probes of each round's
@@ -396,7 +405,11 @@ struct PointTask {
     cells: Vec<Option<Cell>>,
     found: Vec<(usize, Cell, Vec<[f64; 2]>)>,
     probing: Option<(Known, ProbePlan)>,
+    /// Round and probe runs not yet done.
     open: usize,
+    /// The paper's start with `bistable map`'s sensitivity test, and its runs asked so far.
+    paper: Option<PointTest>,
+    paper_asked: usize,
 }
 
 impl PointTask {
@@ -427,8 +440,25 @@ impl PointTask {
             found: Vec::new(),
             probing: None,
             open: 0,
+            paper: Some(PointTest::new(
+                &model,
+                options.classify,
+                options.sensitivity,
+            )),
+            paper_asked: 0,
             starts,
         })
+    }
+
+    /// Runs of the paper start's test, numbered on.
+    fn paper_runs(&mut self, runs: Vec<Run>) -> Vec<PointRun> {
+        runs.into_iter()
+            .map(|r| {
+                self.roles.push(Role::Paper(self.paper_asked));
+                self.paper_asked += 1;
+                PointRun::Plain(r)
+            })
+            .collect()
     }
 
     /// The runs of round `self.round`.
@@ -459,14 +489,14 @@ impl PointTask {
         let mut found = std::mem::take(&mut self.found);
         found.sort_by_key(|f| f.0);
         let fresh = crate::recurrence::learn(&self.known, found.into_iter().map(|f| (f.1, f.2)));
-        let plan = ProbePlan::new(&fresh.periodic, self.ro.directions);
-        if self.recurrence && plan.worth(self.starts.len() - end) {
+        let plan = ProbePlan::new(&fresh.periodic, self.ro.directions, self.starts.len() - end);
+        if self.recurrence && !plan.starts.is_empty() {
             let runs: Vec<PointRun> = plan
                 .starts
                 .iter()
                 .map(|&(x0, v0)| {
                     crate::basins::CellTask::new(&self.model, 0.0, x0, v0, self.co)
-                        .map(|t| PointRun::Probe(t.run()))
+                        .map(|t| PointRun::Plain(t.run()))
                 })
                 .collect::<Result<_, _>>()?;
             for n in 0..runs.len() {
@@ -493,7 +523,10 @@ impl Task for PointTask {
     type Output = PointCoexistence;
 
     fn start(&mut self) -> Result<Vec<PointRun>, SimError> {
-        self.round_runs()
+        let first = self.paper.as_mut().expect("the test").start()?;
+        let mut runs = self.paper_runs(first);
+        runs.extend(self.round_runs()?);
+        Ok(runs)
     }
 
     fn run_done(&mut self, i: usize, result: PointReached) -> Result<Vec<PointRun>, SimError> {
@@ -505,7 +538,11 @@ impl Task for PointTask {
                 }
                 self.cells[s] = Some(cell);
             }
-            (&Role::Probe(n), PointReached::Probe(c)) => {
+            (&Role::Paper(j), PointReached::Plain(c)) => {
+                let more = self.paper.as_mut().expect("the test").run_done(j, c)?;
+                return Ok(self.paper_runs(more));
+            }
+            (&Role::Probe(n), PointReached::Plain(c)) => {
                 let (fresh, plan) = self.probing.as_mut().expect("probing");
                 let (x0, v0) = plan.starts[n];
                 let cell = crate::basins::cell_of(x0, v0, &c);
@@ -532,7 +569,9 @@ impl Task for PointTask {
             .into_iter()
             .map(|c| c.expect("decided"))
             .collect();
-        let (paper, box_cells) = (cells[0], &cells[1..]);
+        let box_cells = &cells[..];
+        let (c, sensitivity) = self.paper.expect("the test").finish();
+        let paper = crate::basins::cell_of(0.0, 0.0, &c);
         let (found, index) = identify(box_cells);
         let mut attractors: Vec<Coexisting> = found
             .iter()
@@ -571,6 +610,7 @@ impl Task for PointTask {
             starts: box_cells.len(),
             attractors,
             paper,
+            paper_sensitive: sensitivity.sensitive,
             paper_attractor,
         }
     }
@@ -637,7 +677,7 @@ pub fn match_branches(
 
 /// Names of the columns of a coexistence table, one row per point and attractor: the CSV of
 /// `bistable coexistence` and the DataFrame of the Python package (see [`row`]).
-pub const COLUMNS: [&str; 28] = [
+pub const COLUMNS: [&str; 29] = [
     "omega",
     "velocity",
     "zeta",
@@ -666,6 +706,7 @@ pub const COLUMNS: [&str; 28] = [
     "paper_period",
     "paper_chaotic",
     "paper_final_well",
+    "paper_sensitive",
 ];
 
 /// What every row of a table records of the sweep's settings (a resumed table must agree).
@@ -725,7 +766,7 @@ pub fn row<'a>(
     branch: Option<usize>,
     t: &'a TableSettings,
     label: &'a str,
-) -> [Value<'a>; 28] {
+) -> [Value<'a>; 29] {
     let a = &p.attractors[k];
     let st = &a.steady;
     let paper = &p.paper.outcome;
@@ -759,6 +800,7 @@ pub fn row<'a>(
         int(paper.period.map(u64::from)),
         Value::Bool(paper.chaotic),
         int(paper.final_well.map(|w| u64::from(w.number()))),
+        Value::Bool(p.paper_sensitive),
     ]
 }
 
@@ -914,6 +956,7 @@ mod tests {
             starts: 10,
             attractors,
             paper,
+            paper_sensitive: false,
             paper_attractor: 0,
         }
     }

@@ -94,8 +94,8 @@ pub const CELL: f64 = 0.01;
 pub const APERIODIC_POINTS: usize = 4096;
 
 /// A new periodic attractor is probed only when the starts still to decide after the round
-/// are at least this many times its probes (else its capture radii stay 0: probing would cost
-/// more than it saves).
+/// are at least this many times its own probes (else its capture radii stay 0: probing would
+/// cost more than it saves).
 pub const PROBE_WORTH: usize = 2;
 
 /// Settings of the recurrence decision (see the module docs).
@@ -177,6 +177,8 @@ pub struct KnownAttractor {
     pub cycle: Vec<[f64; 2]>,
     /// Capture radius of each cycle point (same units; 0: no capture there).
     pub radii: Vec<f64>,
+    /// Whether the radii were probed (else they are 0: probing would not have paid).
+    pub probed: bool,
     /// The start `(x0, x0')` that found it (the first in the list of starts).
     pub found_by: (f64, f64),
 }
@@ -312,6 +314,7 @@ pub(crate) fn learn(
                 steady: cell.steady(),
                 anchor,
                 radii: vec![0.0; points.len()],
+                probed: false,
                 cycle: points,
                 found_by,
             });
@@ -347,26 +350,38 @@ pub(crate) struct ProbePlan {
     pub(crate) starts: Vec<(f64, f64)>,
     rings: Vec<(usize, usize, usize)>,
     failed: Vec<Vec<[bool; PROBE_RADII.len()]>>,
+    /// Per attractor: whether it is probed.
+    probed: Vec<bool>,
 }
 
 impl ProbePlan {
-    pub(crate) fn new(fresh: &[KnownAttractor], directions: u32) -> Self {
+    /// The probes of the attractors of `fresh` whose probing pays with `left` starts still to
+    /// decide: those whose probes number at most `left / PROBE_WORTH` ([`PROBE_WORTH`]).
+    pub(crate) fn new(fresh: &[KnownAttractor], directions: u32, left: usize) -> Self {
         // Probes start at plate phase 0, where the plate is at z = 0.
         const GOLDEN: f64 = 0.618_033_988_749_894_9;
         let d = f64::from(directions);
         let mut starts = Vec::new();
         let mut rings = Vec::new();
+        let mut probed = vec![false; fresh.len()];
         for (a, k) in fresh.iter().enumerate() {
+            let mut own = Vec::new();
             for (j, c) in k.cycle.iter().enumerate() {
                 for (i, r) in PROBE_RADII.iter().enumerate() {
                     for n in 0..directions {
                         let theta = TAU * (f64::from(n) + GOLDEN * i as f64) / d;
                         let s = (c[0] + r * theta.cos(), c[1] + r * theta.sin());
                         if s.0 >= 0.0 {
-                            starts.push(s);
-                            rings.push((a, j, i));
+                            own.push((s, (a, j, i)));
                         }
                     }
+                }
+            }
+            if !own.is_empty() && left >= PROBE_WORTH.saturating_mul(own.len()) {
+                probed[a] = true;
+                for (s, ring) in own {
+                    starts.push(s);
+                    rings.push(ring);
                 }
             }
         }
@@ -378,12 +393,8 @@ impl ProbePlan {
             starts,
             rings,
             failed,
+            probed,
         }
-    }
-
-    /// Whether probing pays with `left` starts still to decide ([`PROBE_WORTH`]).
-    pub(crate) fn worth(&self, left: usize) -> bool {
-        !self.starts.is_empty() && left >= PROBE_WORTH.saturating_mul(self.starts.len())
     }
 
     /// Takes the outcome of probe `n`.
@@ -396,7 +407,11 @@ impl ProbePlan {
 
     /// Sets the capture radii of `fresh` from the probes' outcomes.
     pub(crate) fn set_radii(self, fresh: &mut [KnownAttractor]) {
-        for (k, failed) in fresh.iter_mut().zip(self.failed) {
+        for ((k, failed), probed) in fresh.iter_mut().zip(self.failed).zip(self.probed) {
+            if !probed {
+                continue;
+            }
+            k.probed = true;
             for (radius, rings) in k.radii.iter_mut().zip(failed) {
                 *radius = PROBE_RADII
                     .iter()
@@ -446,8 +461,8 @@ pub fn classify_starts<E>(
             },
         )?;
         let mut fresh = learn(&known, found.into_iter().flatten());
-        let mut plan = ProbePlan::new(&fresh.periodic, ro.directions);
-        if plan.worth(starts.len() - end) {
+        let mut plan = ProbePlan::new(&fresh.periodic, ro.directions, starts.len() - end);
+        if !plan.starts.is_empty() {
             let outcome: Result<(), std::convert::Infallible> = ensemble::run(
                 &plan.starts.clone(),
                 threads,

@@ -9,8 +9,10 @@ use bistable_analysis::coexistence::{
 };
 use bistable_analysis::parallel::Threads;
 use bistable_analysis::recurrence::RecurrenceOptions;
+use bistable_analysis::sensitivity::SensitivityOptions;
+use bistable_analysis::sweep::classify_point_with;
 use bistable_analysis::Model;
-use bistable_core::{classify, ClassifyOptions, Params, SimError, Sinusoid, SolverOptions, Width};
+use bistable_core::{ClassifyOptions, Params, SimError, Sinusoid, SolverOptions, Width};
 
 /// Rest and P-1/P-4 in well 1 (1.45, 0.05); rest, chaos in well 1 and P-8 across the barrier
 /// (2.45, 0.07); rest, P-1 across and P-4 in well 1 (0.85, 0.11).
@@ -36,6 +38,7 @@ fn options(decision: Decision, n: usize) -> CoexistenceOptions {
             ..ClassifyOptions::default()
         },
         decision,
+        ..CoexistenceOptions::default()
     }
 }
 
@@ -126,14 +129,16 @@ fn recurrence_agrees_with_the_full_decision_and_ignores_threads_and_lanes() {
 }
 
 #[test]
-fn the_papers_start_is_decided_as_classify_decides_it() {
+fn the_papers_start_is_decided_as_the_map_decides_it() {
     let o = options(recurrence(), 6);
     for p in sweep(&POINTS, o, 2, Width::Four) {
         let m = model().at(p.omega, p.velocity).unwrap();
-        let c = classify(m.params, m.shaker, m.opts, o.classify).unwrap();
+        let point = classify_point_with(&m, o.classify, SensitivityOptions::default()).unwrap();
+        let c = point.classification;
         assert_eq!(p.paper.outcome.class, c.class);
         assert_eq!(p.paper.outcome.period, c.period);
         assert_eq!(p.paper.periods_simulated, c.periods_simulated);
+        assert_eq!(p.paper_sensitive, point.sensitivity.sensitive);
         let a = &p.attractors[p.paper_attractor];
         assert_eq!(a.steady, p.paper.steady());
     }

@@ -47,7 +47,9 @@ random:K[:SEED] (K seeded uniform starts) in --box X0:X1,V0:V1 (default
 0:1.2,-0.6:0.6; x0 from the plate, at z = 0 at phase 0, to beyond the second
 well), all at τ = 0 with the plate at phase 0. The same starts serve every
 point. The paper's own start (at rest at x = 0, the start of 'bistable map') is
-classified too, in full, and marked (paper_start); it is not one of the K.
+classified too, in full and with the sensitivity test of 'bistable map' (so its
+outcome is the one the map reports), and marked (paper_start); it is not one of
+the K.
 
 Fraction f = n/K of an attractor reached by n of the K starts; standard error
 sqrt(f(1 − f)/K) (binomial: exact for random starts, an upper bound in practice
@@ -75,7 +77,7 @@ CSV (--out): header and one row per point and attractor:
   omega,velocity,zeta,restitution,box,starts,decision,attractors,attractor,
   branch,label,class,period,chaotic,final_well,at_rest,anchor_x,anchor_v,count,
   fraction,fraction_se,decided_by_recurrence,periods_simulated,paper_start,
-  paper_class,paper_period,paper_chaotic,paper_final_well
+  paper_class,paper_period,paper_chaotic,paper_final_well,paper_sensitive
   (box X0:X1;V0:V1; starts as given to --starts; decision recurrence or full;
   attractors: how many coexist at the point; attractor: its number there,
   largest basin first, from 1; branch: its id across the grid, from 1, empty
@@ -85,8 +87,9 @@ CSV (--out): header and one row per point and attractor:
   aperiodic attractor; count: starts that reach it; decided_by_recurrence: how
   many of those stopped by recurrence; periods_simulated: natural periods those
   starts simulated together; paper_start: the paper's start reaches it; the
-  paper_* columns: that start's own class (with its transient, as 'bistable
-  map' reports it), period, chaos and final well).
+  paper_* columns: that start's own class (with its transient), period, chaos
+  and final well, and whether rounding decides them, as 'bistable map' reports
+  them with its sensitivity test).
 
 PNG (--plot): over a grid, the map coloured by the number of coexisting
 attractors, with a ring where the paper's start reaches a minority basin (less
@@ -278,6 +281,7 @@ pub fn run(args: &CoexistenceArgs) -> Result<(), CliError> {
         starts,
         classify,
         decision,
+        ..CoexistenceOptions::default()
     };
     let settings = TableSettings::new(&model, &options);
     let on_grid = |w: f64, v: f64| {
@@ -289,7 +293,8 @@ pub fn run(args: &CoexistenceArgs) -> Result<(), CliError> {
         args.grid.out.as_deref(),
         (omegas, vs),
         |text, row| {
-            let r = parse_row(text, &settings).map_err(|e| format!("has a bad row {row}: {e}"))?;
+            let r = parse_row(text, &settings, starts.count())
+                .map_err(|e| format!("has a bad row {row}: {e}"))?;
             if !on_grid(r.point.omega, r.point.velocity) {
                 return Err(format!(
                     "holds Ω = {}, V = {} (row {row}), not a point of --omega-range {omegas} × \
@@ -391,12 +396,13 @@ fn row<'a>(
     branch: Option<usize>,
     t: &'a TableSettings,
     label: &'a str,
-) -> [Field<'a>; 28] {
+) -> [Field<'a>; 29] {
     row_values(p, k, branch, t, label).map(Field::from)
 }
 
-/// One row read back: its point with only this row's attractor present.
-fn parse_row(text: &str, s: &TableSettings) -> Result<PointRows, String> {
+/// One row read back: its point with only this row's attractor present (`count`: the run's
+/// number of starts, which the row's `starts` matches).
+fn parse_row(text: &str, s: &TableSettings, count: usize) -> Result<PointRows, String> {
     let f: Vec<&str> = text.split(',').collect();
     if f.len() != COLUMNS.len() {
         return Err(format!("{} fields, expected {}", f.len(), COLUMNS.len()));
@@ -513,20 +519,14 @@ fn parse_row(text: &str, s: &TableSettings) -> Result<PointRows, String> {
     let mut present = vec![false; n];
     present[k - 1] = true;
     attractors[k - 1] = attractor;
-    let count_starts: usize = get("starts")
-        .strip_prefix("random:")
-        .map(|r| r.split(':').next().unwrap_or("").parse().unwrap_or(0))
-        .unwrap_or_else(|| {
-            let (a, b) = get("starts").split_once('x').unwrap_or(("0", "0"));
-            a.parse::<usize>().unwrap_or(0) * b.parse::<usize>().unwrap_or(0)
-        });
     Ok(PointRows {
         point: PointCoexistence {
             omega: num("omega")?,
             velocity: num("velocity")?,
-            starts: count_starts,
+            starts: count,
             attractors,
             paper,
+            paper_sensitive: flag("paper_sensitive")?,
             paper_attractor: if flag("paper_start")? {
                 k - 1
             } else {
@@ -561,6 +561,8 @@ struct PointJson {
     /// The number of the attractor the paper's start reaches.
     paper_attractor: usize,
     paper_in_minority: bool,
+    /// Rounding decides the paper start's outcome ('bistable map''s `sensitive`).
+    paper_sensitive: bool,
     attractors: Vec<AttractorJson>,
 }
 
@@ -687,6 +689,7 @@ impl Summary {
                     velocity: p.velocity,
                     paper_attractor: p.paper_attractor + 1,
                     paper_in_minority: p.paper_in_minority(),
+                    paper_sensitive: p.paper_sensitive,
                     attractors: p
                         .attractors
                         .iter()

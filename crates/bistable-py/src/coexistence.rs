@@ -88,6 +88,7 @@ fn setting(
             starts,
             classify,
             decision,
+            ..CoexistenceOptions::default()
         },
     ))
 }
@@ -248,7 +249,8 @@ pub fn coexistence_table<'py>(
 }
 
 /// A point's result as plain data: `omega`, `velocity`, `starts`, `paper` (class, period,
-/// chaotic, final_well of the paper's start), `paper_attractor` (index) and `attractors`
+/// chaotic, final_well of the paper's start), `paper_sensitive`, `paper_attractor` (index) and
+/// `attractors`
 /// (dicts of `across`, `period`, `chaotic`, `well`, `at_rest`, `anchor`, `count`,
 /// `by_recurrence`, `periods_simulated`).
 fn point_dict<'py>(py: Python<'py>, p: &PointCoexistence) -> PyResult<Bound<'py, PyDict>> {
@@ -267,6 +269,7 @@ fn point_dict<'py>(py: Python<'py>, p: &PointCoexistence) -> PyResult<Bound<'py,
         ),
     )?;
     d.set_item("paper_attractor", p.paper_attractor)?;
+    d.set_item("paper_sensitive", p.paper_sensitive)?;
     let list = PyList::empty(py);
     for a in &p.attractors {
         let s = &a.steady;
@@ -351,6 +354,7 @@ fn point_from(d: &Bound<'_, PyDict>) -> Result<PointCoexistence, String> {
             periods_simulated: 0.0,
             decided_by: DecidedBy::Full,
         },
+        paper_sensitive: get(d, "paper_sensitive")?,
         paper_attractor,
     })
 }

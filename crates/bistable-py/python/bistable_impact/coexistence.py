@@ -17,7 +17,7 @@ from . import _native
 COLUMNS = tuple(_native.COEXISTENCE_COLUMNS)
 _INT_COLUMNS = ("attractors", "attractor", "branch", "period", "final_well", "count",
                 "decided_by_recurrence", "paper_period", "paper_final_well")  # fmt: skip
-_BOOL_COLUMNS = ("chaotic", "at_rest", "paper_start", "paper_chaotic")
+_BOOL_COLUMNS = ("chaotic", "at_rest", "paper_start", "paper_chaotic", "paper_sensitive")
 
 Progress = Callable[[int, int], Any]
 
@@ -68,7 +68,8 @@ def coexistence(
     of the starts that reach the attractor, ``fraction_se`` its binomial standard error
     ``sqrt(f (1 - f) / K)``; ``paper_start`` marks the attractor that the paper's start (at
     rest at ``x = 0``, the start of :func:`bistable_impact.sweep.map`) reaches, and the
-    ``paper_*`` columns give that start's own class, period, chaos and final well. See
+    ``paper_*`` columns give that start's own class, period, chaos and final well, and
+    whether rounding decides them, as :func:`bistable_impact.sweep.map` reports them. See
     ``docs/coexistence.md``.
 
     Example::
