@@ -1,8 +1,9 @@
 #!/usr/bin/env bash
 # The coexistence map's cost (docs/benchmarks.md, "Coexistence map"): the 60 × 40 grid of the
 # paper's Fig. 9 with 400 starts per point (`bistable coexistence`'s defaults), once by the CLI
-# on all cores and once through the Python package on a Dask LocalCluster of 2 worker processes
-# of 1 thread each, alternated (CLI, Dask, CLI, Dask unless ROUNDS says otherwise); wall and CPU
+# on all cores and once through the Python package on the package's lean Dask LocalCluster
+# (bi.cluster.local_cluster) of 2 worker processes of 1 thread each (bench/coexistence_dask.py),
+# alternated (CLI, Dask, CLI, Dask unless ROUNDS says otherwise); wall and CPU
 # time of each (CPU: the process and its reaped children, i.e. the Dask workers), and a check
 # that the Dask table equals the CLI's CSV value for value. Also the consistency with
 # `bistable map`: the share of points where the paper's start has the class and period the map
@@ -23,20 +24,7 @@ for r in $(seq "$ROUNDS"); do
   rm -f "$OUT/cli.csv"
   timed "round $r cli:" target/release/bistable coexistence "${GRID[@]}" --out "$OUT/cli.csv" \
     --json > "$OUT/cli.json"
-  timed "round $r dask:" .venv/bin/python - "$OUT" <<'PY'
-import sys, logging
-import distributed
-import bistable_impact as bi
-out = sys.argv[1]
-logging.getLogger("distributed").setLevel(logging.ERROR)
-# The CLI's grid values, bit for bit.
-w, v = bi.linspace(0.2, 3.5, 60), bi.linspace(0.005, 0.2, 40)
-with distributed.LocalCluster(n_workers=2, threads_per_worker=1, processes=True,
-                              dashboard_address=None) as cluster, \
-        distributed.Client(cluster) as client:
-    df = bi.sweep.coexistence(w, v, client=client)
-df.to_csv(f"{out}/dask.csv", index=False)
-PY
+  timed "round $r dask:" .venv/bin/python bench/coexistence_dask.py "$OUT"
   .venv/bin/python - "$OUT" <<'PY'
 import sys
 import pandas as pd

@@ -142,7 +142,7 @@ pub struct CoexistenceArgs {
     )]
     pub start_box: String,
 
-    /// The starts: NXxNV (a grid over the box) or random:K[:SEED] (K uniform random starts,
+    /// The starts: `NXxNV` (a grid over the box) or `random:K[:SEED]` (K uniform random starts,
     /// seed 1 unless given); at most 1e6.
     #[arg(long, value_name = "SPEC", default_value = "20x20")]
     pub starts: String,
