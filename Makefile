@@ -47,8 +47,11 @@ test: lint
 # The CLI's 30 x 20 map for every lane width runs in test-simd, on each SIMD path.
 SIMD_MAP_TEST := map_is_the_same_for_every_lane_width
 
+# The ROS 2 node's own tests run in test-ros, in the release build the ROS tests use (its DDS
+# stack is the largest part of the workspace to compile); the Python module (no Rust tests) is
+# tested by test-python.
 test-rust: setup
-	$(CARGO) test --workspace -- --skip $(SIMD_MAP_TEST)
+	$(CARGO) test --workspace --exclude bistable_impact_node --exclude bistable-py -- --skip $(SIMD_MAP_TEST)
 
 ## The SIMD paths (BISTABLE_SIMD, crates/bistable-core/src/simd.rs): the lanes' bit-identity
 ## tests (lanes against lone simulators, flights_at against mass_at) on the detected path, on

@@ -6,7 +6,7 @@
 
 ROS_NODE_BIN := target/release/bistable_impact_node
 
-.PHONY: test-ros test-ros-patches stress-ros ros-setup ros-build
+.PHONY: test-ros test-ros-patches test-ros-node stress-ros ros-setup ros-build
 
 ## ROS 2 venv (ros/.venv) and the rosidl build of bistable_impact_msgs; skipped when up to date.
 ros-setup: setup
@@ -20,7 +20,11 @@ ros-build:
 test-ros-patches: setup
 	$(CARGO) test --manifest-path .deps/rustdds/Cargo.toml --lib --quiet rtps::writer::tests::repair
 
-test-ros: ros-setup ros-build test-ros-patches
+## The node crate's unit and integration tests, in the release build of ros-build.
+test-ros-node: setup
+	$(CARGO) test --release -p bistable_impact_node
+
+test-ros: ros-setup ros-build test-ros-patches test-ros-node
 	bash ros/run-tests.sh
 
 TEST_TARGETS += test-ros
