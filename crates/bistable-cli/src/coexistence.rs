@@ -846,9 +846,9 @@ fn draw_map(
     })
 }
 
-/// Colour of branch `id` along a line.
-fn branch_colour(id: usize) -> RGBColor {
-    const PALETTE: [RGBColor; 10] = [
+/// Colour of the `k`-th branch along a line (distinct for the first 20).
+fn branch_colour(k: usize) -> RGBColor {
+    const PALETTE: [RGBColor; 20] = [
         RGBColor(31, 119, 180),
         RGBColor(255, 127, 14),
         RGBColor(44, 160, 44),
@@ -859,8 +859,18 @@ fn branch_colour(id: usize) -> RGBColor {
         RGBColor(127, 127, 127),
         RGBColor(188, 189, 34),
         RGBColor(23, 190, 207),
+        RGBColor(174, 199, 232),
+        RGBColor(255, 187, 120),
+        RGBColor(152, 223, 138),
+        RGBColor(255, 152, 150),
+        RGBColor(197, 176, 213),
+        RGBColor(196, 156, 148),
+        RGBColor(247, 182, 210),
+        RGBColor(199, 199, 199),
+        RGBColor(219, 219, 141),
+        RGBColor(158, 218, 229),
     ];
-    PALETTE[id % PALETTE.len()]
+    PALETTE[k % PALETTE.len()]
 }
 
 fn draw_line(
@@ -897,14 +907,15 @@ fn draw_line(
     };
     let legend: Vec<(Mark, String)> = ids
         .iter()
-        .take(16)
-        .map(|&id| {
+        .enumerate()
+        .take(20)
+        .map(|(k, &id)| {
             let label = s
                 .branches
                 .get(id)
                 .map_or(String::new(), |b| b.label.clone());
             (
-                Mark::Square(branch_colour(id)),
+                Mark::Square(branch_colour(k)),
                 format!("#{} {label}", id + 1),
             )
         })
@@ -935,7 +946,7 @@ fn draw_line(
         let (top, bottom) = area.split_vertically(h * 11 / 20);
         let mut chart = plot::chart(&top, (lo, hi), (0.0, 1.0), x_desc, "basin fraction", None)?;
         let mut below = vec![0.0; points.len()];
-        for &id in &ids {
+        for (k, &id) in ids.iter().enumerate() {
             let above: Vec<f64> = points
                 .iter()
                 .zip(&below)
@@ -953,7 +964,7 @@ fn draw_line(
                     .rev()
                     .map(|((p, _), &y)| (x_of(p), y)),
             );
-            chart.draw_series([Polygon::new(poly, branch_colour(id).filled())])?;
+            chart.draw_series([Polygon::new(poly, branch_colour(k).filled())])?;
             below = above;
         }
         let ys: Vec<f64> = orbits
