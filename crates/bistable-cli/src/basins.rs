@@ -589,23 +589,6 @@ fn human(s: &Summary) -> String {
     t
 }
 
-const PALETTE: [RGBColor; 10] = [
-    RGBColor(31, 119, 180),
-    RGBColor(255, 127, 14),
-    RGBColor(44, 160, 44),
-    RGBColor(214, 39, 40),
-    RGBColor(148, 103, 189),
-    RGBColor(140, 86, 75),
-    RGBColor(227, 119, 194),
-    RGBColor(127, 127, 127),
-    RGBColor(188, 189, 34),
-    RGBColor(23, 190, 207),
-];
-
-fn colour(i: usize) -> RGBColor {
-    PALETTE[i % PALETTE.len()]
-}
-
 fn draw(
     root: &Area<'_>,
     s: &Summary,
@@ -647,7 +630,7 @@ fn draw(
                 cells
                     .iter()
                     .zip(index)
-                    .map(|(c, &i)| plot::cell((c.x0, c.v0), (hx, hv), colour(i))),
+                    .map(|(c, &i)| plot::cell((c.x0, c.v0), (hx, hv), plot::category_colour(i))),
             )?;
             // Legend: attractors with their basin fractions.
             let text = |size| (FONT, size).into_font().color(&BLACK);
@@ -662,7 +645,7 @@ fn draw(
                 plot::swatch(
                     right,
                     y,
-                    colour(i),
+                    plot::category_colour(i),
                     format!("#{} {:.1}%", a.number, 100.0 * a.fraction),
                     (a.label.clone(), 12, RGBColor(70, 70, 70)),
                 )?;

@@ -846,33 +846,6 @@ fn draw_map(
     })
 }
 
-/// Colour of the `k`-th branch along a line (distinct for the first 20).
-fn branch_colour(k: usize) -> RGBColor {
-    const PALETTE: [RGBColor; 20] = [
-        RGBColor(31, 119, 180),
-        RGBColor(255, 127, 14),
-        RGBColor(44, 160, 44),
-        RGBColor(214, 39, 40),
-        RGBColor(148, 103, 189),
-        RGBColor(140, 86, 75),
-        RGBColor(227, 119, 194),
-        RGBColor(127, 127, 127),
-        RGBColor(188, 189, 34),
-        RGBColor(23, 190, 207),
-        RGBColor(174, 199, 232),
-        RGBColor(255, 187, 120),
-        RGBColor(152, 223, 138),
-        RGBColor(255, 152, 150),
-        RGBColor(197, 176, 213),
-        RGBColor(196, 156, 148),
-        RGBColor(247, 182, 210),
-        RGBColor(199, 199, 199),
-        RGBColor(219, 219, 141),
-        RGBColor(158, 218, 229),
-    ];
-    PALETTE[k % PALETTE.len()]
-}
-
 fn draw_line(
     path: &Path,
     s: &Summary,
@@ -915,7 +888,7 @@ fn draw_line(
                 .get(id)
                 .map_or(String::new(), |b| b.label.clone());
             (
-                Mark::Square(branch_colour(k)),
+                Mark::Square(plot::category_colour(k)),
                 format!("#{} {label}", id + 1),
             )
         })
@@ -964,7 +937,7 @@ fn draw_line(
                     .rev()
                     .map(|((p, _), &y)| (x_of(p), y)),
             );
-            chart.draw_series([Polygon::new(poly, branch_colour(k).filled())])?;
+            chart.draw_series([Polygon::new(poly, plot::category_colour(k).filled())])?;
             below = above;
         }
         let ys: Vec<f64> = orbits

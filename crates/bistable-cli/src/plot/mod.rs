@@ -490,6 +490,34 @@ pub(crate) fn swatch(
     Ok(())
 }
 
+/// The `i`-th of 20 distinct colours for categories (attractors, branches), repeating after
+/// that: the ten of Vega's `category10`, then their light tints.
+pub(crate) fn category_colour(i: usize) -> RGBColor {
+    const PALETTE: [RGBColor; 20] = [
+        RGBColor(31, 119, 180),
+        RGBColor(255, 127, 14),
+        RGBColor(44, 160, 44),
+        RGBColor(214, 39, 40),
+        RGBColor(148, 103, 189),
+        RGBColor(140, 86, 75),
+        RGBColor(227, 119, 194),
+        RGBColor(127, 127, 127),
+        RGBColor(188, 189, 34),
+        RGBColor(23, 190, 207),
+        RGBColor(174, 199, 232),
+        RGBColor(255, 187, 120),
+        RGBColor(152, 223, 138),
+        RGBColor(255, 152, 150),
+        RGBColor(197, 176, 213),
+        RGBColor(196, 156, 148),
+        RGBColor(247, 182, 210),
+        RGBColor(199, 199, 199),
+        RGBColor(219, 219, 141),
+        RGBColor(158, 218, 229),
+    ];
+    PALETTE[i % PALETTE.len()]
+}
+
 /// Drops points closer than about a pixel to the previous kept one (keeps the last point).
 fn thin(chart: &Chart<'_, '_>, pts: &[(f64, f64)]) -> Vec<(f64, f64)> {
     let mut out: Vec<(f64, f64)> = Vec::with_capacity(pts.len().min(100_000));
