@@ -128,10 +128,7 @@ def coexistence(
         raise TypeError("'box' must be four numbers (x0 from, x0 to, x0' from, x0' to)")
     options: Dict[str, Any] = dict(
         start_box=b,
-        zeta=check.real("zeta", zeta),
-        restitution=check.real("restitution", restitution),
-        tol=check.real("tol", tol),
-        chatter=check.text("chatter", chatter),
+        **check.model(zeta=zeta, restitution=restitution, tol=tol, chatter=chatter),
         max_periods=check.real("max_periods", max_periods),
         lyapunov_periods=check.integer(
             "lyapunov_periods", lyapunov_periods, 1, check.MAX_LYAPUNOV_PERIODS
