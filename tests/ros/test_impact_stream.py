@@ -15,7 +15,8 @@ impacts before it matched and every one after, contiguous, up to N-1.
 The chatter case (Omega 0.2, V 0.05: impact chatter and sticking, the fastest stream) and the
 baseline (Omega 1.75, V 0.07), each with rclpy and with Cyclone DDS subscribers (the Cyclone
 runs have an rclpy subscriber from the start as well); one run with both kinds of subscriber and
-SIGINT; one with the machine loaded (two busy processes). Figures printed as STREAM {...} lines."""
+SIGINT; one with the machine loaded (two busy processes). Figures printed as STREAM {...} lines.
+And a frozen node delivers a tick larger than the send window before it is stopped."""
 import json
 import os
 import random
@@ -220,7 +221,7 @@ def run(domain, case, early_kinds, late_kind, interrupt=False, load=0):
     if not load:
         assert rate >= MIN_RATE, report
     # Every located impact is published, also those still waiting for the send window when the
-    # stop came (at SIGINT, or right after the freeze on a loaded machine).
+    # stop came (at SIGINT) or when the last tick before the freeze ended (then while frozen).
     assert s["failed"] == 0 and n == s["located"], report
     ref = reference(omega, v, max(m.t for r in peers.readers for m in r.got) + 1.0)
     assert len(ref) >= n, (len(ref), n)
@@ -255,3 +256,32 @@ def test_sigint_while_streaming_every_published_impact_arrives():
 
 def test_loaded_machine_no_loss_no_duplicate():
     run(66, CHATTER, ["rclpy", "cyclone"], "rclpy", load=2)
+
+
+def test_frozen_node_delivers_what_it_located(tmp_path):
+    """A node frozen (real_time_factor 1e-9) right after a tick with more impacts than the send
+    window holds (publish_rate 2e-4 Hz: ~20,000 chatter impacts in its first tick, an rclpy
+    subscriber taking ~7,000 a second) delivers every one of them while it stays frozen, not
+    only when it is stopped."""
+    domain = 67
+    reader = ReaderProcess("fastdds", domain, str(tmp_path / "frozen.json"))
+    node = NodeProcess("-p", "real_time_factor:=1e-9", "-p", "publish_rate:=2e-4", "-p", f"Omega:={CHATTER[0]}",
+                       "-p", f"V:={CHATTER[1]}", "-p", "wait_for_impact_subscriptions:=1", domain=domain)
+    try:
+        # Quiet for 2 s: the subscriber has what the frozen node will ever send it.
+        counts, last, end = None, time.monotonic(), time.monotonic() + 60
+        while time.monotonic() < end and (not counts or time.monotonic() - last < 2.0):
+            now = reader.counts()
+            if now != counts:
+                counts, last = now, time.monotonic()
+            time.sleep(0.2)
+        held = counts.get("early", 0) if counts else 0
+        assert node.alive()
+    finally:
+        log = node.stop()
+        rows = reader.collect()["early"]["rows"]
+    s = summary(log)
+    assert s["failed"] == 0 and s["published"] == s["located"] > 10000, s
+    assert held == s["published"], f"frozen node: {held} of {s['published']} located impacts delivered before the stop"
+    got = impacts_of(rows)
+    check_stream(got, reference(*CHATTER, got[-1].t + 1.0), 0, s["published"] - 1, "frozen")

@@ -19,6 +19,9 @@ use super::publish::{
 };
 use super::serve::{register_wakeups, Inbox, State, STOP_TOKEN};
 
+/// How often a wait for the next tick publishes impacts still queued for the send window.
+const QUEUE_POLL: Duration = Duration::from_millis(1);
+
 /// Runs the node until SIGINT/SIGTERM; the error that kept it from starting.
 pub fn run(cfg: Config, range: DiscoveryRange) -> Result<(), String> {
     let stop = Arc::new(AtomicBool::new(false));
@@ -172,8 +175,28 @@ impl Loop<'_> {
             }
             st.repace();
         } else if let Some(due) = st.pacer.due(st.runner.now()) {
-            self.inbox.wait_until(due, self.stop, st, &d.log);
+            self.wait_due(st, due);
             st.last_due = Some(due);
+        }
+    }
+
+    /// Waits until the next tick is due at wall-clock instant `due` (or a stop or a change of
+    /// pacing), serving commands and requests. Impacts still queued for the send window are
+    /// published meanwhile, every [`QUEUE_POLL`], as the subscribers' acknowledgements open
+    /// it: a paced or frozen node (`real_time_factor` near 0) does not hold them back until
+    /// its next tick.
+    fn wait_due(&mut self, st: &mut State, due: Instant) {
+        let d = self.dds;
+        loop {
+            publish_impacts(&d.impact_pub, &mut st.impacts, &mut st.n, &d.log);
+            let until = if st.impacts.is_empty() {
+                due
+            } else {
+                due.min(Instant::now() + QUEUE_POLL)
+            };
+            if !self.inbox.wait_until(until, self.stop, st, &d.log) || until == due {
+                return;
+            }
         }
     }
 

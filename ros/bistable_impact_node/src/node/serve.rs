@@ -378,15 +378,22 @@ impl<'a> Inbox<'a> {
     }
 
     /// Serves commands and requests until wall-clock instant `until` (or a stop request, or a
-    /// change of pacing), sleeping in between until something arrives.
-    pub fn wait_until(&mut self, until: Instant, stop: &AtomicBool, st: &mut State, log: &Logger) {
+    /// change of pacing), sleeping in between until something arrives; whether `until` was
+    /// reached (false: stopped or repaced before).
+    pub fn wait_until(
+        &mut self,
+        until: Instant,
+        stop: &AtomicBool,
+        st: &mut State,
+        log: &Logger,
+    ) -> bool {
         while !stop.load(Ordering::Relaxed) {
             if self.serve(st, log, true) {
-                return;
+                return false;
             }
             let now = Instant::now();
             if now >= until {
-                return;
+                return true;
             }
             let mut wake = until.min(self.diagnostics.next);
             if self.unread {
@@ -399,5 +406,6 @@ impl<'a> Inbox<'a> {
                 self.requests_waiting = true;
             }
         }
+        false
     }
 }
