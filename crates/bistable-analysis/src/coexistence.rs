@@ -488,8 +488,15 @@ impl PointTask {
         let (_, end) = self.rounds[self.round];
         let mut found = std::mem::take(&mut self.found);
         found.sort_by_key(|f| f.0);
-        let fresh = crate::recurrence::learn(&self.known, found.into_iter().map(|f| (f.1, f.2)));
-        let plan = ProbePlan::new(&fresh.periodic, self.ro.directions, self.starts.len() - end);
+        let mut fresh =
+            crate::recurrence::learn(&self.known, found.into_iter().map(|f| (f.1, f.2)));
+        // Without recurrence nothing is probed.
+        let left = if self.recurrence {
+            self.starts.len() - end
+        } else {
+            0
+        };
+        let plan = ProbePlan::new(&self.model, &mut fresh.periodic, self.ro.directions, left);
         if self.recurrence && !plan.starts.is_empty() {
             let runs: Vec<PointRun> = plan
                 .starts

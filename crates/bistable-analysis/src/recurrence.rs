@@ -10,25 +10,31 @@
 //! aperiodic one keeps the cells of side [`CELL`] of the section plane that the last
 //! [`APERIODIC_POINTS`] section points of its run (at most the last half of the run) occupy.
 //!
-//! **Capture radius.** The neighbourhood of each cycle point that is known to lie in the
-//! attractor's basin is measured once, by probes: for each candidate radius `r` of
-//! [`PROBE_RADII`] (0.1 down to 1e-4), [`RecurrenceOptions::directions`] starts on the circle
-//! of radius `r` around the point (the ring's directions turned by a golden-ratio fraction of
-//! the spacing from ring to ring), at plate phase 0, each run to the full decision. A probe
-//! *passes* when it reaches the same attractor (steady state and cycle anchor, as
+//! **Capture region.** The neighbourhood of each cycle point that is known to lie in the
+//! attractor's basin is measured once, by probes, in the metric of the point's [`Ellipse`]:
+//! the eigenvector basis of the cycle's monodromy matrix there (shot with
+//! [`bistable_core::shoot`]), in which the linearised `p`-period map shrinks every
+//! displacement by the multipliers' modulus. (In the plain `(x, x')` distance a stable focus
+//! sends its neighbours out along a skewed ellipse before they come in: at (1.45, 0.05) the
+//! P-1 orbit's ellipse has semi-axes 4 : 1.) For each candidate radius `r` of [`PROBE_RADII`]
+//! (0.1 down to 1e-4), [`RecurrenceOptions::directions`] starts on the ellipse of radius `r`
+//! around the point (the ring's directions turned by a golden-ratio fraction of the spacing
+//! from ring to ring), at plate phase 0, each run to the full decision. A probe *passes* when
+//! it reaches the same attractor (steady state and cycle anchor, as
 //! [`crate::basins::identify`] groups cells) and, unless the attractor crosses the barrier,
 //! without any snap-through (class intrawell); probes below the plate (unreachable states) and
-//! failed runs count as passing and failing respectively. The point's capture radius is half
-//! the largest `r` whose ring and every smaller ring passed, 0 when the smallest ring failed
-//! (no capture at that point). Probing costs `13 × directions` full runs per cycle point; it is
-//! done only when the starts still to decide after the round are at least [`PROBE_WORTH`]
-//! times the probes, else the attractor is known with radius 0 (its starts are decided in
-//! full): a few hundred starts per point are cheaper in full than with probes.
+//! failed runs count as passing and failing respectively. The point's capture radius is
+//! [`CAPTURE_FRACTION`] (half) of the largest `r` whose ring and every smaller ring passed, 0
+//! when the smallest ring failed (no capture at that point). Probing costs `13 × directions`
+//! full runs per cycle point; it is done only when the starts still to decide after the round
+//! are at least [`PROBE_WORTH`] times these nominal probes, else the attractor is known with
+//! radius 0 (its starts are decided in full): a few hundred starts per point are cheaper in
+//! full than with probes.
 //!
 //! **Decision.** A start is assigned to known periodic attractor `k` when
 //! [`RecurrenceOptions::hits`] (default 2, as Attractors.jl's `consecutive_attractor_steps`)
-//! consecutive section points each lie within the capture radius (Euclidean distance in the
-//! `(x, x')` plane) of the cycle point of `k` that the orbit visits at that section: the first
+//! consecutive section points each lie within the capture radius (in its ellipse's metric) of
+//! the cycle point of `k` that the orbit visits at that section: the first
 //! hit may be at any cycle point `j`, the next must be at `j + 1 (mod p)`, and so on. It is
 //! assigned to known aperiodic attractor `k` when [`RecurrenceOptions::aperiodic_hits`]
 //! (default 20) consecutive section points lie in cells of `k`. A start that is not captured
@@ -55,8 +61,8 @@
 //! full decision as measured in `docs/sensitivity.md`, `periods_simulated` differs.
 //!
 //! **Where this differs from Attractors.jl.** Periodic attractors are the exact cycles
-//! (section points) of the full decision, and their capture neighbourhood is a probed radius
-//! per cycle point, not a grid cell; only aperiodic attractors are held in cells, as
+//! (section points) of the full decision, and their capture neighbourhood is a probed ellipse
+//! per cycle point, shaped by the cycle's linearisation, not a grid cell; only aperiodic attractors are held in cells, as
 //! Attractors.jl holds every attractor, and they need more consecutive hits (20, not 2)
 //! because nothing probes their neighbourhood. Transient cells are never labelled (no
 //! `consecutive_basin_steps`): on fractal basins that would mislabel starts near the
@@ -76,14 +82,20 @@ use bistable_core::{
 
 use crate::basins::{cell_of, same_attractor, Cell, CellTask, DecidedBy, Steady};
 use crate::ensemble::{self, Run, RunSpec, Task};
+use crate::orbit;
 use crate::parallel::Threads;
 use crate::sensitivity::Outcome;
 use crate::Model;
 
-/// Candidate capture radii, largest first, in state units (`Δx` for `x`, `ω0·Δx` for `x'`).
+/// Candidate capture radii, largest first, in the metric of the cycle point's [`Ellipse`] (state
+/// units, `Δx` for `x` and `ω0·Δx` for `x'`, along its smaller semi-axis).
 pub const PROBE_RADII: [f64; 13] = [
     0.1, 0.05, 0.03, 0.02, 0.01, 5e-3, 3e-3, 2e-3, 1e-3, 5e-4, 3e-4, 2e-4, 1e-4,
 ];
+
+/// The capture radius is this fraction of the largest probed radius whose ring and every
+/// smaller ring passed.
+pub const CAPTURE_FRACTION: f64 = 0.5;
 
 /// Side of the square cells of the section plane that hold an aperiodic attractor, in state
 /// units.
@@ -175,8 +187,11 @@ pub struct KnownAttractor {
     /// The `p` section points `(x, x')` of the cycle at plate phase 0, in the order the orbit
     /// visits them (the one after `cycle[j]` is `cycle[(j + 1) % p]`).
     pub cycle: Vec<[f64; 2]>,
-    /// Capture radius of each cycle point (same units; 0: no capture there).
+    /// Capture radius of each cycle point, in the metric of its [`Ellipse`] (0: no capture
+    /// there).
     pub radii: Vec<f64>,
+    /// Shape of each cycle point's capture region (circles until probed).
+    pub shapes: Vec<Ellipse>,
     /// Whether the radii were probed (else they are 0: probing would not have paid).
     pub probed: bool,
     /// The start `(x0, x0')` that found it (the first in the list of starts).
@@ -200,8 +215,94 @@ impl KnownAttractor {
     fn within(&self, j: usize, y: [f64; 2]) -> bool {
         let r = self.radii[j];
         let c = self.cycle[j];
-        let (dx, dv) = (y[0] - c[0], y[1] - c[1]);
-        r > 0.0 && dx * dx + dv * dv <= r * r
+        r > 0.0 && self.shapes[j].norm([y[0] - c[0], y[1] - c[1]]) <= r
+    }
+}
+
+/// Largest ratio of the semi-axes of a capture [`Ellipse`]; a cycle point whose monodromy
+/// gives a longer one (nearly equal real multipliers) is captured in a circle.
+pub const MAX_ASPECT: f64 = 10.0;
+
+/// The shape of a cycle point's capture region: the ellipse `{c + S·u : |u| ≤ r}` around
+/// cycle point `c`, whose "radius" `r` is measured in the norm `|S⁻¹·(y − c)|`. `S` is the
+/// real eigenvector basis of the cycle's monodromy matrix `M` at that point (for complex
+/// multipliers `λ = a ± ib` the real and imaginary parts of an eigenvector), scaled so that the
+/// ellipse's smaller semi-axis is `r`: it contains the circle of radius `r`. In this norm the
+/// linearised `p`-period map shrinks every displacement by the largest `|λ|` (a rotation and
+/// a contraction for complex multipliers), so trajectories near the cycle approach it
+/// monotonically instead of swinging out along the ellipse that circles would cut across.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Ellipse {
+    /// `S`, row-major: its columns map the unit circle onto the ellipse of radius 1.
+    pub axes: [[f64; 2]; 2],
+    /// `S⁻¹`, row-major.
+    inverse: [[f64; 2]; 2],
+}
+
+impl Ellipse {
+    /// The circle (`S = I`): Euclidean distance in the `(x, x')` plane.
+    pub const CIRCLE: Ellipse = Ellipse {
+        axes: [[1.0, 0.0], [0.0, 1.0]],
+        inverse: [[1.0, 0.0], [0.0, 1.0]],
+    };
+
+    /// The ellipse of monodromy matrix `m` (row-major over `(x, x')`); the circle when `m`
+    /// has no two independent real eigenvectors or complex pair (equal multipliers, a
+    /// sticking orbit's `M = 0`), the semi-axes' ratio would exceed [`MAX_ASPECT`], or `m` is
+    /// not finite.
+    pub fn of_monodromy(m: [[f64; 2]; 2]) -> Self {
+        let [(a, b), (c, _)] = bistable_core::shooting::eigenvalues(m);
+        // An eigenvector of λ: (m01, λ − m00) when m01 ≠ 0, else (λ − m11, m10).
+        let column = |re: f64| {
+            if m[0][1].abs() >= m[1][0].abs() {
+                [m[0][1], re - m[0][0]]
+            } else {
+                [re - m[1][1], m[1][0]]
+            }
+        };
+        let (u, w) = if b != 0.0 {
+            // a + ib: real part (m01, a − m00), imaginary part (0, b) (m01 ≠ 0 for a complex
+            // pair).
+            ([m[0][1], a - m[0][0]], [0.0, b])
+        } else if a != c {
+            (column(a), column(c))
+        } else {
+            return Self::CIRCLE;
+        };
+        let s = [[u[0], w[0]], [u[1], w[1]]];
+        let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
+        // Singular values of S from SᵀS: σ² = t/2 ± sqrt(t²/4 − det²), t = |S|_F².
+        let t = u[0] * u[0] + u[1] * u[1] + w[0] * w[0] + w[1] * w[1];
+        let root = (0.25 * t * t - det * det).max(0.0).sqrt();
+        let (big, small) = ((0.5 * t + root).sqrt(), (0.5 * t - root).max(0.0).sqrt());
+        if !(det.is_finite() && det != 0.0 && small > 0.0 && big <= MAX_ASPECT * small) {
+            return Self::CIRCLE;
+        }
+        // Scaled by 1/σ_min: the smaller semi-axis of the ellipse of radius r is r.
+        let k = 1.0 / small;
+        let axes = [[s[0][0] * k, s[0][1] * k], [s[1][0] * k, s[1][1] * k]];
+        let d = det * k * k;
+        let inverse = [
+            [axes[1][1] / d, -axes[0][1] / d],
+            [-axes[1][0] / d, axes[0][0] / d],
+        ];
+        Self { axes, inverse }
+    }
+
+    /// `|S⁻¹·d|`: the "radius" of displacement `d` from the cycle point.
+    pub fn norm(&self, d: [f64; 2]) -> f64 {
+        let i = &self.inverse;
+        (i[0][0] * d[0] + i[0][1] * d[1]).hypot(i[1][0] * d[0] + i[1][1] * d[1])
+    }
+
+    /// The point at radius `r` and angle `theta` around `c`: `c + r·S·(cos θ, sin θ)`.
+    fn at(&self, c: [f64; 2], r: f64, theta: f64) -> [f64; 2] {
+        let (cos, sin) = (theta.cos(), theta.sin());
+        let s = &self.axes;
+        [
+            c[0] + r * (s[0][0] * cos + s[0][1] * sin),
+            c[1] + r * (s[1][0] * cos + s[1][1] * sin),
+        ]
     }
 }
 
@@ -314,6 +415,7 @@ pub(crate) fn learn(
                 steady: cell.steady(),
                 anchor,
                 radii: vec![0.0; points.len()],
+                shapes: vec![Ellipse::CIRCLE; points.len()],
                 probed: false,
                 cycle: points,
                 found_by,
@@ -356,32 +458,42 @@ pub(crate) struct ProbePlan {
 
 impl ProbePlan {
     /// The probes of the attractors of `fresh` whose probing pays with `left` starts still to
-    /// decide: those whose probes number at most `left / PROBE_WORTH` ([`PROBE_WORTH`]).
-    pub(crate) fn new(fresh: &[KnownAttractor], directions: u32, left: usize) -> Self {
+    /// decide: those whose nominal probes (`13 × directions` per cycle point) number at most
+    /// `left / PROBE_WORTH` ([`PROBE_WORTH`]). Their cycle points get the [`Ellipse`] of their
+    /// monodromy (shot at `model` from the cycle point; the circle if shooting fails), and the
+    /// probes lie on those ellipses.
+    pub(crate) fn new(
+        model: &Model,
+        fresh: &mut [KnownAttractor],
+        directions: u32,
+        left: usize,
+    ) -> Self {
         // Probes start at plate phase 0, where the plate is at z = 0.
         const GOLDEN: f64 = 0.618_033_988_749_894_9;
         let d = f64::from(directions);
         let mut starts = Vec::new();
         let mut rings = Vec::new();
         let mut probed = vec![false; fresh.len()];
-        for (a, k) in fresh.iter().enumerate() {
-            let mut own = Vec::new();
-            for (j, c) in k.cycle.iter().enumerate() {
-                for (i, r) in PROBE_RADII.iter().enumerate() {
+        for (a, k) in fresh.iter_mut().enumerate() {
+            let nominal = k.cycle.len() * PROBE_RADII.len() * directions as usize;
+            if left < PROBE_WORTH.saturating_mul(nominal) {
+                continue;
+            }
+            probed[a] = true;
+            let period = k.cycle.len() as u32;
+            for (j, &c) in k.cycle.iter().enumerate() {
+                let shape = orbit::shoot(model, period, (c[0], c[1]))
+                    .map_or(Ellipse::CIRCLE, |o| Ellipse::of_monodromy(o.monodromy));
+                k.shapes[j] = shape;
+                for (i, &r) in PROBE_RADII.iter().enumerate() {
                     for n in 0..directions {
                         let theta = TAU * (f64::from(n) + GOLDEN * i as f64) / d;
-                        let s = (c[0] + r * theta.cos(), c[1] + r * theta.sin());
-                        if s.0 >= 0.0 {
-                            own.push((s, (a, j, i)));
+                        let s = shape.at(c, r, theta);
+                        if s[0] >= 0.0 {
+                            starts.push((s[0], s[1]));
+                            rings.push((a, j, i));
                         }
                     }
-                }
-            }
-            if !own.is_empty() && left >= PROBE_WORTH.saturating_mul(own.len()) {
-                probed[a] = true;
-                for (s, ring) in own {
-                    starts.push(s);
-                    rings.push(ring);
                 }
             }
         }
@@ -419,7 +531,7 @@ impl ProbePlan {
                     .rev()
                     .take_while(|(_, f)| !f)
                     .last()
-                    .map_or(0.0, |(r, _)| r / 2.0);
+                    .map_or(0.0, |(r, _)| r * CAPTURE_FRACTION);
             }
         }
     }
@@ -461,7 +573,12 @@ pub fn classify_starts<E>(
             },
         )?;
         let mut fresh = learn(&known, found.into_iter().flatten());
-        let mut plan = ProbePlan::new(&fresh.periodic, ro.directions, starts.len() - end);
+        let mut plan = ProbePlan::new(
+            model,
+            &mut fresh.periodic,
+            ro.directions,
+            starts.len() - end,
+        );
         if !plan.starts.is_empty() {
             let outcome: Result<(), std::convert::Infallible> = ensemble::run(
                 &plan.starts.clone(),
@@ -759,5 +876,109 @@ impl Task for RecurrenceCell {
 
     fn finish(self) -> (Cell, Vec<[f64; 2]>) {
         self.result.expect("the cell's run is done")
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn apply(m: [[f64; 2]; 2], d: [f64; 2]) -> [f64; 2] {
+        [
+            m[0][0] * d[0] + m[0][1] * d[1],
+            m[1][0] * d[0] + m[1][1] * d[1],
+        ]
+    }
+
+    /// `S·R·S⁻¹` for `S` with columns `u`, `w`.
+    fn similar(u: [f64; 2], w: [f64; 2], r: [[f64; 2]; 2]) -> [[f64; 2]; 2] {
+        let s = [[u[0], w[0]], [u[1], w[1]]];
+        let det = s[0][0] * s[1][1] - s[0][1] * s[1][0];
+        let inv = [
+            [s[1][1] / det, -s[0][1] / det],
+            [-s[1][0] / det, s[0][0] / det],
+        ];
+        let mut sr = [[0.0; 2]; 2];
+        let mut m = [[0.0; 2]; 2];
+        for i in 0..2 {
+            for j in 0..2 {
+                sr[i][j] = (0..2).map(|k| s[i][k] * r[k][j]).sum();
+            }
+        }
+        for i in 0..2 {
+            for j in 0..2 {
+                m[i][j] = (0..2).map(|k| sr[i][k] * inv[k][j]).sum();
+            }
+        }
+        m
+    }
+
+    fn directions() -> impl Iterator<Item = [f64; 2]> {
+        (0..64).map(|n| {
+            let t = TAU * f64::from(n) / 64.0 + 0.1;
+            [0.7 * t.cos(), 0.7 * t.sin()]
+        })
+    }
+
+    #[test]
+    fn the_ellipse_norm_shrinks_by_the_multipliers_modulus_and_holds_the_circle() {
+        // Complex multipliers 0.78·e^{±i·1.9} in a skewed basis (the P-1 orbit at (1.45, 0.05)
+        // has this kind of monodromy, semi-axes about 4:1), and real ones 0.6 and -0.2.
+        let (q, phi) = (0.78_f64, 1.9_f64);
+        let rotation = [
+            [q * phi.cos(), q * phi.sin()],
+            [-q * phi.sin(), q * phi.cos()],
+        ];
+        let cases = [
+            (similar([1.0, 0.3], [0.2, -1.5], rotation), q),
+            (
+                similar([1.0, 0.8], [0.1, 1.0], [[0.6, 0.0], [0.0, -0.2]]),
+                0.6,
+            ),
+        ];
+        for (m, modulus) in cases {
+            let e = Ellipse::of_monodromy(m);
+            assert_ne!(e, Ellipse::CIRCLE, "{m:?}");
+            for d in directions() {
+                let (before, after) = (e.norm(d), e.norm(apply(m, d)));
+                // |S⁻¹ M d| = |R S⁻¹ d|: the modulus for a rotation-contraction, at most the
+                // largest |λ| for a diagonal R.
+                assert!(after <= modulus * before * (1.0 + 1e-12), "{m:?} {d:?}");
+                if modulus == q {
+                    assert!((after - q * before).abs() <= 1e-12 * before, "{m:?} {d:?}");
+                }
+                // The ellipse of radius r holds the circle of radius r: |S⁻¹ d| ≤ |d|.
+                assert!(before <= d[0].hypot(d[1]) * (1.0 + 1e-12), "{m:?} {d:?}");
+                // Ring points lie at their radius.
+                let theta = d[1].atan2(d[0]);
+                let p = e.at([0.3, -0.1], 0.05, theta);
+                assert!((e.norm([p[0] - 0.3, p[1] + 0.1]) - 0.05).abs() < 1e-15);
+            }
+            // Its smaller semi-axis is the radius: some direction has |S⁻¹ d| = |d|.
+            let widest = directions()
+                .map(|d| e.norm(d) / d[0].hypot(d[1]))
+                .fold(0.0, f64::max);
+            assert!(widest > 0.999, "{widest}");
+        }
+    }
+
+    #[test]
+    fn degenerate_monodromies_give_the_circle() {
+        let circle = |m| Ellipse::of_monodromy(m) == Ellipse::CIRCLE;
+        // A sticking orbit (M = 0), equal multipliers (defective or not), NaN.
+        assert!(circle([[0.0, 0.0], [0.0, 0.0]]));
+        assert!(circle([[0.5, 1.0], [0.0, 0.5]]));
+        assert!(circle([[0.5, 0.0], [0.0, 0.5]]));
+        assert!(circle([[f64::NAN, 0.0], [0.0, 0.5]]));
+        // Nearly equal real multipliers: eigenvectors nearly parallel, semi-axes beyond
+        // MAX_ASPECT.
+        assert!(circle(similar(
+            [1.0, 0.0],
+            [1.0, 1e-3],
+            [[0.5, 0.0], [0.0, 0.4]]
+        )));
+        // A diagonal monodromy: its eigenvectors are the axes, the circle.
+        let e = Ellipse::of_monodromy([[0.5, 0.0], [0.0, 0.2]]);
+        assert!((e.norm([0.3, 0.4]) - 0.5).abs() < 1e-15);
     }
 }

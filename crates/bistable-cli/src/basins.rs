@@ -44,11 +44,14 @@ as --recurrence-hits (2) consecutive section points (plate phase 0) lie within
 the capture radius of the cycle points of a periodic attractor already found
 here, or --aperiodic-hits (20) consecutive section points lie in the cells
 (side 0.01) of an aperiodic (chaotic) attractor already found here. Each
-attractor is found and classified once by the full decision; the capture radius
-of each cycle point is half the largest of 0.1, 0.05, ..., 1e-4 (units Δx,
-ω0·Δx) whose ring of 16 probe starts, and every smaller ring, all reach it
-without crossing the barrier (probed only when the starts still to decide are
-at least twice the probes). The starts are taken in rounds (256, then doubling)
+attractor is found and classified once by the full decision. The capture region
+of each cycle point is an ellipse shaped by the cycle's monodromy matrix there
+(its eigenvector basis, in which the linearised map shrinks every displacement
+by the multipliers' modulus; smaller semi-axis = the radius); its radius is half
+the largest of 0.1, 0.05, ..., 1e-4 (units Δx, ω0·Δx) whose ring of 16 probe
+starts, and every smaller ring, all reach the attractor without crossing the
+barrier (probed only when the starts still to decide are at least twice the
+probes). The JSON lists each cycle point's radius and ellipse axes. The starts are taken in rounds (256, then doubling)
 with the attractors of the rounds before, so the cells do not depend on
 --threads or --lanes. Rest in well 2 is decided as in full. See
 docs/sensitivity.md.
@@ -192,6 +195,7 @@ struct KnownJson {
     label: String,
     cycle: Vec<[f64; 2]>,
     capture_radii: Vec<f64>,
+    capture_axes: Vec<[[f64; 2]; 2]>,
     found_by: [f64; 2],
 }
 
@@ -386,6 +390,7 @@ pub fn run(args: &BasinsArgs) -> Result<(), CliError> {
                         ),
                         cycle: k.cycle.clone(),
                         capture_radii: k.radii.clone(),
+                        capture_axes: k.shapes.iter().map(|e| e.axes).collect(),
                         found_by: [k.found_by.0, k.found_by.1],
                     })
                     .collect(),
