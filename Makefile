@@ -49,9 +49,12 @@ SIMD_MAP_TEST := map_is_the_same_for_every_lane_width
 
 # The ROS 2 node's own tests run in test-ros, in the release build the ROS tests use (its DDS
 # stack is the largest part of the workspace to compile); the Python module (no Rust tests) is
-# tested by test-python.
+# tested by test-python. test-simd selects the same packages, so that cargo resolves the same
+# dependency features and reuses test-rust's build instead of compiling it again.
+RUST_TEST_PACKAGES := --workspace --exclude bistable_impact_node --exclude bistable-py
+
 test-rust: setup
-	$(CARGO) test --workspace --exclude bistable_impact_node --exclude bistable-py -- --skip $(SIMD_MAP_TEST)
+	$(CARGO) test $(RUST_TEST_PACKAGES) -- --skip $(SIMD_MAP_TEST)
 
 ## The SIMD paths (BISTABLE_SIMD, crates/bistable-core/src/simd.rs): the lanes' bit-identity
 ## tests (lanes against lone simulators, flights_at against mass_at) on the detected path, on
@@ -62,12 +65,12 @@ test-simd: setup
 	@paths="auto portable"; grep -qw avx512f /proc/cpuinfo 2>/dev/null && paths="$$paths avx2"; \
 	for path in $$paths; do \
 		echo "test-simd: SIMD path BISTABLE_SIMD=$$path: lanes against lone simulators"; \
-		BISTABLE_SIMD=$$path $(CARGO) test --workspace --test simd --test batch --test mass_at \
+		BISTABLE_SIMD=$$path $(CARGO) test $(RUST_TEST_PACKAGES) --test simd --test batch --test mass_at \
 			-- --nocapture || exit 1; \
 	done; \
 	for path in auto portable; do \
 		echo "test-simd: SIMD path BISTABLE_SIMD=$$path: the 30 x 20 map for every lane width"; \
-		BISTABLE_SIMD=$$path $(CARGO) test --workspace --test simd --test lanes \
+		BISTABLE_SIMD=$$path $(CARGO) test $(RUST_TEST_PACKAGES) --test simd --test lanes \
 			-- --nocapture --exact simd_path_is_the_one_asked_for $(SIMD_MAP_TEST) || exit 1; \
 	done
 
