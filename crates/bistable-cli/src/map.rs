@@ -1,7 +1,7 @@
 //! `bistable map`: the response-class map of the paper's Fig. 9 over an `Ω × V` grid, computed
 //! in parallel, written row by row to a resumable CSV file and drawn as a PNG.
 
-use std::collections::HashMap;
+use std::collections::{BTreeMap, HashMap};
 use std::path::{Path, PathBuf};
 use std::time::Instant as WallClock;
 
@@ -146,7 +146,8 @@ struct Summary {
     sensitive_share: f64,
     /// Points repeated by the sensitivity test (suspect ones).
     repeated: usize,
-    counts: HashMap<String, usize>,
+    /// Points per category, by label (in label order, so the JSON is the same every run).
+    counts: BTreeMap<String, usize>,
     out: Option<PathBuf>,
     plot: Option<PathBuf>,
 }
@@ -198,7 +199,7 @@ pub fn run(args: &MapArgs) -> Result<(), CliError> {
     if let Some(path) = &args.grid.plot {
         draw(path, &model, omegas, vs, &records, &done.failed, co)?;
     }
-    let mut counts: HashMap<String, usize> = HashMap::new();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
     for r in &records {
         *counts.entry(category(r).label()).or_default() += 1;
     }
