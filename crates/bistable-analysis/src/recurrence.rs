@@ -62,9 +62,9 @@
 //!
 //! **Where this differs from Attractors.jl.** Periodic attractors are the exact cycles
 //! (section points) of the full decision, and their capture neighbourhood is a probed ellipse
-//! per cycle point, shaped by the cycle's linearisation, not a grid cell; only aperiodic attractors are held in cells, as
-//! Attractors.jl holds every attractor, and they need more consecutive hits (20, not 2)
-//! because nothing probes their neighbourhood. Transient cells are never labelled (no
+//! per cycle point, shaped by the cycle's linearisation, not a grid cell; only aperiodic
+//! attractors are held in cells, as Attractors.jl holds every attractor, and they need more
+//! consecutive hits (20, not 2) because nothing probes their neighbourhood. Transient cells are never labelled (no
 //! `consecutive_basin_steps`): on fractal basins that would mislabel starts near the
 //! boundaries. New attractors are not found by counting recurrences in unlabelled cells but by
 //! the full decision, so their class, period and final well are the paper's. Rest in well 2 is
@@ -296,7 +296,7 @@ impl Ellipse {
     }
 
     /// The point at radius `r` and angle `theta` around `c`: `c + r·S·(cos θ, sin θ)`.
-    fn at(&self, c: [f64; 2], r: f64, theta: f64) -> [f64; 2] {
+    pub fn at(&self, c: [f64; 2], r: f64, theta: f64) -> [f64; 2] {
         let (cos, sin) = (theta.cos(), theta.sin());
         let s = &self.axes;
         [

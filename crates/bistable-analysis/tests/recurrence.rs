@@ -168,17 +168,12 @@ fn recurrence_agrees_with_the_full_decision_at_1_45_0_05() {
     let (shape, c) = (p1.shapes[0], p1.cycle[0]);
     assert!(shape != Ellipse::CIRCLE && p1.radii[0] > 0.0, "{p1:?}");
     let r = p1.radii[0] / 10.0;
-    let s = shape.axes;
     let (mut ellipse, mut circle) = (0.0_f64, 0.0_f64);
     for n in 0..64 {
         let t = std::f64::consts::TAU * f64::from(n) / 64.0;
-        let edge = [
-            c[0] + r * (s[0][0] * t.cos() + s[0][1] * t.sin()),
-            c[1] + r * (s[1][0] * t.cos() + s[1][1] * t.sin()),
-        ];
-        let y = next_section(&model, edge);
+        let y = next_section(&model, shape.at(c, r, t));
         ellipse = ellipse.max(shape.norm([y[0] - c[0], y[1] - c[1]]) / r);
-        let z = next_section(&model, [c[0] + r * t.cos(), c[1] + r * t.sin()]);
+        let z = next_section(&model, Ellipse::CIRCLE.at(c, r, t));
         circle = circle.max((z[0] - c[0]).hypot(z[1] - c[1]) / r);
     }
     assert!(
