@@ -12,6 +12,9 @@ use bistable_core::interrupt;
 /// How often the calling thread calls its interrupt check while it waits for the workers.
 const POLL: Duration = Duration::from_millis(20);
 
+/// How long the calling thread lets results gather while they keep coming ([`receive`]).
+const BATCH: Duration = Duration::from_millis(2);
+
 /// A number of worker threads (at least one).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub struct Threads(NonZeroUsize);
@@ -108,25 +111,43 @@ pub fn run_workers<'a, T: Sync, R: Send, E>(
             });
         }
         drop(tx);
-        let mut result = Ok(());
-        loop {
-            match rx.recv_timeout(POLL) {
-                Ok((i, r)) => {
-                    result = done(i, r);
-                    if result.is_err() {
-                        break;
-                    }
-                }
-                Err(RecvTimeoutError::Timeout) => {
-                    // What the check decides reaches the workers through their own calls.
-                    interrupt::poll();
-                }
-                Err(RecvTimeoutError::Disconnected) => break,
-            }
-        }
+        let result = receive(&rx, &mut done);
         stop.store(true, Ordering::Relaxed);
         result
     })
+}
+
+/// Passes the results of `rx` to `done` until the workers are gone or `done` fails. While
+/// results keep coming, this thread takes them [`BATCH`] apart, all that arrived, instead of
+/// waiting on the channel: a worker's send then finds no waiting receiver to wake, which would
+/// cost a system call and a context switch per result. When a batch brings none, it waits on
+/// the channel again (calling the interrupt check every [`POLL`]).
+fn receive<R, E>(
+    rx: &mpsc::Receiver<(usize, R)>,
+    done: &mut impl FnMut(usize, R) -> Result<(), E>,
+) -> Result<(), E> {
+    loop {
+        match rx.recv_timeout(POLL) {
+            Ok((i, r)) => done(i, r)?,
+            Err(RecvTimeoutError::Timeout) => {
+                // What the check decides reaches the workers through their own calls.
+                interrupt::poll();
+                continue;
+            }
+            Err(RecvTimeoutError::Disconnected) => return Ok(()),
+        }
+        loop {
+            std::thread::sleep(BATCH);
+            let mut got = false;
+            for (i, r) in rx.try_iter() {
+                got = true;
+                done(i, r)?;
+            }
+            if !got {
+                break;
+            }
+        }
+    }
 }
 
 /// Computes `work(item)` for every item on `threads` threads and returns the results in the
@@ -184,6 +205,38 @@ mod tests {
         );
         assert_eq!(r, Err("stop"));
         assert_eq!(calls, 10);
+    }
+
+    #[test]
+    fn a_result_reaches_done_while_other_items_still_run() {
+        // On one worker, item 1 waits until item 0's result has reached `done`: a worker does
+        // not hold results back until its items are done (the wait gives up after 10 s, and
+        // the test then fails).
+        let delivered = AtomicBool::new(false);
+        let mut order = Vec::new();
+        run(
+            &[0u32, 1],
+            Threads::new(1).unwrap(),
+            |&i| {
+                if i == 1 {
+                    let t = std::time::Instant::now();
+                    while !delivered.load(Ordering::SeqCst) && t.elapsed().as_secs() < 10 {
+                        std::thread::sleep(Duration::from_millis(1));
+                    }
+                    return delivered.load(Ordering::SeqCst);
+                }
+                true
+            },
+            |i, saw_zero| {
+                if i == 0 {
+                    delivered.store(true, Ordering::SeqCst);
+                }
+                order.push((i, saw_zero));
+                Ok::<(), ()>(())
+            },
+        )
+        .unwrap();
+        assert_eq!(order, vec![(0, true), (1, true)]);
     }
 
     #[test]
