@@ -193,6 +193,19 @@ fn recurrence_agrees_with_the_full_decision_at_1_75_0_07() {
 }
 
 #[test]
+fn a_periodic_orbit_among_chaotic_cells_keeps_its_starts() {
+    // Rest in well 2, chaos in well 1 on a few cells, and a P-1 orbit in well 1 whose section
+    // point lies among them, with a multiplier of −0.989: its starts stay in the chaotic
+    // cells for many sections while they settle (without the settling test, 43 of these 900
+    // cells were captured as chaotic).
+    let (_, known) = compare(0.927, 0.065, 30);
+    assert!(
+        !known.aperiodic.is_empty() && !known.periodic.is_empty(),
+        "{known:?}"
+    );
+}
+
+#[test]
 fn bad_recurrence_options_are_named() {
     let bad = RecurrenceOptions {
         hits: 0,
