@@ -48,7 +48,8 @@ co = bi.coexistence.read_csv(f"{out}/cli.csv")
 m = bi.sweep.read_csv(f"{out}/map.csv")
 paper = co[co["paper_start"]].set_index(["omega", "velocity"])
 m = m.set_index(["omega", "velocity"])
-j = paper.join(m[["class", "period", "sensitive"]], rsuffix="_map")
+j = paper.merge(m[["class", "period", "sensitive"]], left_index=True, right_index=True,
+                how="left", suffixes=("", "_map"))
 same = (j["paper_class"] == j["class_map"]) & (j["paper_period"].fillna(-1) == j["period_map"].fillna(-1))
 print(f"consistency with bistable map: {same.sum()} of {len(j)} points ({100 * same.mean():.2f} %)")
 for k, r in j[~same].iterrows():

@@ -68,12 +68,13 @@
 //! (section points) of the full decision, and their capture neighbourhood is a probed ellipse
 //! per cycle point, shaped by the cycle's linearisation, not a grid cell; only aperiodic
 //! attractors are held in cells, as Attractors.jl holds every attractor, and they need more
-//! consecutive hits (20, not 2) because nothing probes their neighbourhood. Transient cells are never labelled (no
-//! `consecutive_basin_steps`): on fractal basins that would mislabel starts near the
-//! boundaries. New attractors are not found by counting recurrences in unlabelled cells but by
-//! the full decision, so their class, period and final well are the paper's. Rest in well 2 is
-//! decided as today (it is reached within a few periods). Aperiodic attractors are told apart
-//! by kind and well only, as [`crate::basins::identify`] groups cells.
+//! consecutive hits (20, not 2) because nothing probes their neighbourhood. Transient cells
+//! are never labelled (no `consecutive_basin_steps`): on fractal basins that mislabels starts
+//! near the boundaries (measured in `docs/sensitivity.md`). New attractors are not found by
+//! counting recurrences in unlabelled cells but by the full decision, so their class, period
+//! and final well are the paper's. Rest in well 2 is decided as today (it is reached within a
+//! few periods). Aperiodic attractors are told apart by kind and well only, as
+//! [`crate::basins::identify`] groups cells.
 
 use std::collections::{HashSet, VecDeque};
 use std::f64::consts::TAU;
