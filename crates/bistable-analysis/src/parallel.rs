@@ -85,12 +85,14 @@ pub fn run_workers<'a, T: Sync, R: Send, E>(
     let next = AtomicUsize::new(0);
     let stop = AtomicBool::new(false);
     let check = interrupt::current();
+    let caller = std::thread::current();
     std::thread::scope(|s| {
         let (tx, rx) = mpsc::channel::<(usize, R)>();
         for _ in 0..threads.get().min(items.len()) {
             let tx = tx.clone();
             let (next, stop, worker) = (&next, &stop, &worker);
             let check = check.clone();
+            let caller = caller.clone();
             s.spawn(move || {
                 let work_items = || {
                     let mut pull = || {
@@ -108,6 +110,9 @@ pub fn run_workers<'a, T: Sync, R: Send, E>(
                     Some(c) => interrupt::with_check(c, work_items),
                     None => work_items(),
                 }
+                // Done: a caller letting results gather need not wait out its pause.
+                drop(tx);
+                caller.unpark();
             });
         }
         drop(tx);
@@ -120,8 +125,9 @@ pub fn run_workers<'a, T: Sync, R: Send, E>(
 /// Passes the results of `rx` to `done` until the workers are gone or `done` fails. While
 /// results keep coming, this thread takes them [`BATCH`] apart, all that arrived, instead of
 /// waiting on the channel: a worker's send then finds no waiting receiver to wake, which would
-/// cost a system call and a context switch per result. When a batch brings none, it waits on
-/// the channel again (calling the interrupt check every [`POLL`]).
+/// cost a system call and a context switch per result. A worker that finishes unparks this
+/// thread, so the last results are not held for the rest of a pause. When a batch brings none,
+/// it waits on the channel again (calling the interrupt check every [`POLL`]).
 fn receive<R, E>(
     rx: &mpsc::Receiver<(usize, R)>,
     done: &mut impl FnMut(usize, R) -> Result<(), E>,
@@ -137,7 +143,7 @@ fn receive<R, E>(
             Err(RecvTimeoutError::Disconnected) => return Ok(()),
         }
         loop {
-            std::thread::sleep(BATCH);
+            std::thread::park_timeout(BATCH);
             let mut got = false;
             for (i, r) in rx.try_iter() {
                 got = true;
