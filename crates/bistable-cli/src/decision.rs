@@ -17,12 +17,12 @@ pub struct DecisionArgs {
 
     /// Consecutive section points within the capture radius of a known periodic attractor
     /// that decide a start by recurrence.
-    #[arg(long, value_name = "N", default_value_t = 2)]
+    #[arg(long, value_name = "N", default_value_t = RecurrenceOptions::default().hits)]
     pub recurrence_hits: u32,
 
     /// Consecutive section points in the cells of a known aperiodic (chaotic) attractor that
-    /// decide a start by recurrence.
-    #[arg(long, value_name = "N", default_value_t = 20)]
+    /// decide a start by recurrence, unless they close in on a cycle.
+    #[arg(long, value_name = "N", default_value_t = RecurrenceOptions::default().aperiodic_hits)]
     pub aperiodic_hits: u32,
 }
 

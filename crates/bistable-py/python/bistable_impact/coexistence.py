@@ -52,7 +52,7 @@ def coexistence(
     lyapunov_periods: int = 300,
     full_decision: bool = False,
     recurrence_hits: int = 2,
-    aperiodic_hits: int = 20,
+    aperiodic_hits: int = 100,
     match_distance: float = 0.2,
 ) -> "pd.DataFrame":
     """Which attractors coexist at every point of the grid ``omega × velocity`` and how likely
@@ -100,7 +100,7 @@ def coexistence(
         full_decision: decide every start in full (no recurrence).
         recurrence_hits, aperiodic_hits: consecutive section points that capture a start on a
             known periodic attractor (within its probed radius) or a known aperiodic one (in
-            its cells).
+            its cells, unless they close in on a cycle).
         match_distance: largest anchor distance of two attractors matched into one branch.
         Other arguments: as for :func:`bistable_impact.classify`.
     """
