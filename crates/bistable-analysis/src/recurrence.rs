@@ -43,10 +43,9 @@
 //! when the streak reaches the count and every count sections after, over its last twice the
 //! count of points): a periodic orbit can lie among an aperiodic attractor's cells, and a run
 //! settling onto it stays in them; such a run goes on (to a periodic capture or its full
-//! decision). A start
-//! that is not captured runs to today's full decision unchanged (periodicity, rest in well 2,
-//! or the `max_periods` limit for aperiodic motion, with its Lyapunov exponent), and a new
-//! attractor it finds becomes known.
+//! decision). A start that is not captured runs to today's full decision unchanged
+//! (periodicity, rest in well 2, or the `max_periods` limit for aperiodic motion, with its
+//! Lyapunov exponent), and a new attractor it finds becomes known.
 //!
 //! **What a captured cell reports.** Period (none for aperiodic), chaos, final well and cycle
 //! anchor are those of `k` (the anchor is that of the start that found `k`; a full decision of
@@ -71,9 +70,9 @@
 //! per cycle point, shaped by the cycle's linearisation, not a grid cell; only aperiodic
 //! attractors are held in cells, as Attractors.jl holds every attractor, and they need more
 //! consecutive hits (100, as many as Attractors.jl's `consecutive_recurrences` asks to find an
-//! attractor) because nothing probes their neighbourhood. Transient cells
-//! are never labelled (no `consecutive_basin_steps`): on fractal basins that mislabels starts
-//! near the boundaries (measured in `docs/sensitivity.md`). New attractors are not found by
+//! attractor) because nothing probes their neighbourhood. Transient cells are never labelled
+//! (no `consecutive_basin_steps`): on fractal basins that mislabels starts near the
+//! boundaries (measured in `docs/sensitivity.md`). New attractors are not found by
 //! counting recurrences in unlabelled cells but by the full decision, so their class, period
 //! and final well are the paper's. Rest in well 2 is decided as today (it is reached within a
 //! few periods). Aperiodic attractors are told apart by kind and well only, as
