@@ -54,8 +54,8 @@ starts, and every smaller ring, all reach the attractor without crossing the
 barrier (probed only when the starts still to decide are at least twice the
 probes). The JSON lists each cycle point's radius and ellipse axes. The starts
 are taken in rounds (256, then doubling) with the attractors of the rounds
-before, so the cells do not depend on --threads or --lanes. Rest in well 2 is decided as in full. See
-docs/sensitivity.md.
+before, so the cells do not depend on --threads or --lanes. Rest in well 2 is
+decided as in full. See docs/sensitivity.md.
 
 Uncertainty exponent (Grebogi, McDonald, Ott & Yorke 1983): a start is
 ε-uncertain when x0 ± ε reaches another attractor. The fraction f(ε) of

@@ -60,10 +60,10 @@ once it is known to be on an attractor already found at this point (2
 consecutive section points within the probed capture radius of a periodic one,
 or 100 in the cells of an aperiodic one that do not close in on a cycle). Each
 point takes its starts in rounds (16, then doubling), so its result does not
-depend on --threads, --lanes or the other points. With a few hundred starts, periodic attractors are mostly not
-probed (probing costs more than it saves): their starts run in full, and the
-recurrence saves its time on chaotic attractors, whose starts would otherwise
-run the full --max-periods.
+depend on --threads, --lanes or the other points. With a few hundred starts,
+periodic attractors are mostly not probed (probing costs more than it saves):
+their starts run in full, and the recurrence saves its time on chaotic
+attractors, whose starts would otherwise run the full --max-periods.
 
 Resuming: each point's rows are appended and flushed when the point is done (in
 an interleaved order over the grid); run the same command again to compute only
