@@ -37,7 +37,7 @@
 //! the cycle point of `k` that the orbit visits at that section: the first
 //! hit may be at any cycle point `j`, the next must be at `j + 1 (mod p)`, and so on. It is
 //! assigned to known aperiodic attractor `k` when [`RecurrenceOptions::aperiodic_hits`]
-//! (default 100) consecutive section points lie in cells of `k`, unless those points close in
+//! (default 500) consecutive section points lie in cells of `k`, unless those points close in
 //! on a cycle (for some period `p ≤ max_period`, the distances between points `p` sections
 //! apart in the newest third of the streak all lie below those in the oldest third; asked
 //! when the streak reaches the count and every count sections after, over its last twice the
@@ -69,8 +69,11 @@
 //! (section points) of the full decision, and their capture neighbourhood is a probed ellipse
 //! per cycle point, shaped by the cycle's linearisation, not a grid cell; only aperiodic
 //! attractors are held in cells, as Attractors.jl holds every attractor, and they need more
-//! consecutive hits (100, as many as Attractors.jl's `consecutive_recurrences` asks to find an
-//! attractor) because nothing probes their neighbourhood. Transient cells are never labelled
+//! consecutive hits (500, five times the 100 `consecutive_recurrences` that Attractors.jl asks
+//! to find an attractor) because nothing probes their neighbourhood and a run can take
+//! hundreds of sections in its cells to settle onto a periodic orbit among them, too
+//! irregularly for the settling test to see (measured in `docs/sensitivity.md`). Transient
+//! cells are never labelled
 //! (no `consecutive_basin_steps`): on fractal basins that mislabels starts near the
 //! boundaries (measured in `docs/sensitivity.md`). New attractors are not found by
 //! counting recurrences in unlabelled cells but by the full decision, so their class, period
@@ -136,7 +139,7 @@ impl Default for RecurrenceOptions {
     fn default() -> Self {
         Self {
             hits: 2,
-            aperiodic_hits: 100,
+            aperiodic_hits: 500,
             first_round: 256,
             directions: 16,
         }

@@ -42,7 +42,7 @@ e.g. low- and high-energy P-1 in well 1, differ there).
 Decision by recurrence (the default; --full-decision turns it off): a start stops as soon
 as --recurrence-hits (2) consecutive section points (plate phase 0) lie within
 the capture radius of the cycle points of a periodic attractor already found
-here, or --aperiodic-hits (100) consecutive section points lie in the cells
+here, or --aperiodic-hits (500) consecutive section points lie in the cells
 (side 0.01) of an aperiodic (chaotic) attractor already found here without
 closing in on a cycle (a periodic orbit can lie among those cells). Each
 attractor is found and classified once by the full decision. The capture region

@@ -58,7 +58,7 @@ for a grid). An attractor only the paper's start reaches is listed with n = 0.
 Decision by recurrence (as for 'bistable basins', see its --help): a start stops
 once it is known to be on an attractor already found at this point (2
 consecutive section points within the probed capture radius of a periodic one,
-or 100 in the cells of an aperiodic one that do not close in on a cycle). Each
+or 500 in the cells of an aperiodic one that do not close in on a cycle). Each
 point takes its starts in rounds (16, then doubling), so its result does not
 depend on --threads, --lanes or the other points. With a few hundred starts,
 periodic attractors are mostly not probed (probing costs more than it saves):

@@ -46,7 +46,7 @@ fn cell_dict<'py>(py: Python<'py>, c: &Cell) -> PyResult<Bound<'py, PyDict>> {
 #[pyfunction]
 #[pyo3(signature = (omega, velocity, phase, starts, zeta=0.02, restitution=0.85, tol=1e-16,
     chatter="accumulation", max_periods=2000.0, lyapunov_periods=300, threads=0, lanes=4,
-    full_decision=false, recurrence_hits=2, aperiodic_hits=100, check_only=false))]
+    full_decision=false, recurrence_hits=2, aperiodic_hits=500, check_only=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn basin_cells<'py>(
     py: Python<'py>,

@@ -102,7 +102,7 @@ fn setting(
 #[pyfunction]
 #[pyo3(signature = (points, start_box=(0.0, 1.2, -0.6, 0.6), grid=None, random=None, zeta=0.02,
     restitution=0.85, tol=1e-16, chatter="accumulation", max_periods=20000.0,
-    lyapunov_periods=300, full_decision=false, recurrence_hits=2, aperiodic_hits=100,
+    lyapunov_periods=300, full_decision=false, recurrence_hits=2, aperiodic_hits=500,
     threads=0, lanes=4, progress=None, check_only=false))]
 #[allow(clippy::too_many_arguments)]
 pub fn coexistence_points<'py>(
@@ -175,7 +175,7 @@ pub fn coexistence_points<'py>(
 #[pyo3(signature = (points, omegas, velocities, match_distance=0.2,
     start_box=(0.0, 1.2, -0.6, 0.6), grid=None, random=None, zeta=0.02, restitution=0.85,
     tol=1e-16, chatter="accumulation", max_periods=20000.0, lyapunov_periods=300,
-    full_decision=false, recurrence_hits=2, aperiodic_hits=100))]
+    full_decision=false, recurrence_hits=2, aperiodic_hits=500))]
 #[allow(clippy::too_many_arguments)]
 pub fn coexistence_table<'py>(
     py: Python<'py>,

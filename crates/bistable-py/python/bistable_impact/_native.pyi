@@ -257,7 +257,7 @@ def basin_cells(
     lanes: int = 4,
     full_decision: bool = False,
     recurrence_hits: int = 2,
-    aperiodic_hits: int = 100,
+    aperiodic_hits: int = 500,
     check_only: bool = False,
 ) -> List[Dict[str, Any]]: ...
 
@@ -286,7 +286,7 @@ def coexistence_points(
     lyapunov_periods: int = 300,
     full_decision: bool = False,
     recurrence_hits: int = 2,
-    aperiodic_hits: int = 100,
+    aperiodic_hits: int = 500,
     threads: int = 0,
     lanes: int = 4,
     progress: Optional[Callable[[int, int], Any]] = None,
@@ -309,5 +309,5 @@ def coexistence_table(
     lyapunov_periods: int = 300,
     full_decision: bool = False,
     recurrence_hits: int = 2,
-    aperiodic_hits: int = 100,
+    aperiodic_hits: int = 500,
 ) -> List[Dict[str, Any]]: ...

@@ -95,7 +95,7 @@ def basins(
     lyapunov_periods: int = 300,
     full_decision: bool = False,
     recurrence_hits: int = 2,
-    aperiodic_hits: int = 100,
+    aperiodic_hits: int = 500,
 ):
     """Classifies every start of the grid ``x0 × v0`` at plate phase ``phase`` (cycles) for the
     shaker point ``(omega, velocity)``, as ``bistable basins`` does, and groups the starts by

@@ -52,7 +52,7 @@ def coexistence(
     lyapunov_periods: int = 300,
     full_decision: bool = False,
     recurrence_hits: int = 2,
-    aperiodic_hits: int = 100,
+    aperiodic_hits: int = 500,
     match_distance: float = 0.2,
 ) -> "pd.DataFrame":
     """Which attractors coexist at every point of the grid ``omega × velocity`` and how likely
