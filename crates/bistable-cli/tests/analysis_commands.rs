@@ -2,6 +2,7 @@
 //! `thresholds`, `energy-map`, `spectrum`): the built binary is run as a user would, and its
 //! results are checked against the paper and against the core.
 
+use std::os::unix::process::CommandExt;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
@@ -1591,12 +1592,22 @@ fn coexistence_stopped_by_ctrl_c_resumes_to_the_same_result() {
         .output()
         .unwrap();
     assert!(o.status.success(), "{}", stderr(&o));
-    let mut child = Command::new(env!("CARGO_BIN_EXE_bistable"))
+    let mut command = Command::new(env!("CARGO_BIN_EXE_bistable"));
+    command
         .args(args(&cut))
         .stdout(std::process::Stdio::null())
-        .stderr(std::process::Stdio::null())
-        .spawn()
-        .unwrap();
+        .stderr(std::process::Stdio::null());
+    // Ctrl-C in a terminal finds SIGINT at its default action. A background job of a
+    // non-interactive shell (as some CI runners start the suite) has it ignored, and a child
+    // inherits that, so the child is given the default back.
+    // SAFETY: `signal` is async-signal-safe, as `pre_exec` requires.
+    unsafe {
+        command.pre_exec(|| {
+            libc::signal(libc::SIGINT, libc::SIG_DFL);
+            Ok(())
+        });
+    }
+    let mut child = command.spawn().unwrap();
     // Interrupt once some points are written.
     let started = std::time::Instant::now();
     while std::fs::read_to_string(&cut).map_or(0, |t| t.lines().count()) < 4 {
